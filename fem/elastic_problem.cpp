@@ -1,0 +1,145 @@
+#include "fem/elastic_problem.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <stdexcept>
+
+namespace drom::fem {
+
+ElasticProblem::ElasticProblem(const Mesh& mesh, const PartShape& shape, const Material& material, std::vector<StressProfile> profiles)
+    : mesh_(mesh),
+      shape_(shape),
+      profiles_(std::move(profiles)),
+      operators_(mesh, material),
+      pattern_(mesh),
+      activity_(static_cast<std::size_t>(mesh.element_count()), 1.0) {
+  if (profiles_.empty()) throw std::invalid_argument("ElasticProblem: at least one stress profile");
+}
+
+Eigen::VectorXd ElasticProblem::gather(int e, const Eigen::VectorXd& u) const {
+  const auto nodes = mesh_.element(e);
+  Eigen::VectorXd ue(3 * static_cast<Eigen::Index>(nodes.size()));
+  for (std::size_t a = 0; a < nodes.size(); ++a) ue.segment<3>(3 * static_cast<Eigen::Index>(a)) = u.segment<3>(3 * nodes[a]);
+  return ue;
+}
+
+Eigen::SparseMatrix<double> ElasticProblem::assemble_stiffness(const std::vector<double>& fraction) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Eigen::SparseMatrix<double> K = pattern_.zero_matrix();
+  for (int e = 0; e < mesh_.element_count(); ++e) {
+    const double a = fraction[static_cast<std::size_t>(e)];
+    if (a < kMinVolumeFraction) continue;
+    pattern_.add_element(K, mesh_.element(e), operators_.stiffness(e), a);
+  }
+  assembly_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return K;
+}
+
+void ElasticProblem::hold(Eigen::SparseMatrix<double>& K, const std::vector<char>& held) const {
+  // Unit-scaled diagonal keeps the held block as well conditioned as the rest.
+  double diag_sum = 0;
+  int diag_count = 0;
+  for (int c = 0; c < K.outerSize(); ++c)
+    if (!held[static_cast<std::size_t>(c)]) {
+      diag_sum += K.coeff(c, c);
+      ++diag_count;
+    }
+  const double scale = diag_count ? diag_sum / diag_count : 1.0;
+  for (int c = 0; c < K.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(K, c); it; ++it)
+      if (held[static_cast<std::size_t>(it.row())] || held[static_cast<std::size_t>(c)]) it.valueRef() = it.row() == c ? scale : 0.0;
+}
+
+void ElasticProblem::equilibrate(const std::vector<int>& isostatic_dofs) {
+  const auto P = static_cast<Eigen::Index>(profiles_.size());
+  Eigen::MatrixXd fR = Eigen::MatrixXd::Zero(mesh_.dof_count(), P);
+  for (int e = 0; e < mesh_.element_count(); ++e) {
+    const Eigen::MatrixXd fe = operators_.stress_load(e, profiles_, shape_);
+    const auto nodes = mesh_.element(e);
+    for (std::size_t a = 0; a < nodes.size(); ++a) fR.middleRows<3>(3 * nodes[a]) += fe.middleRows<3>(3 * static_cast<Eigen::Index>(a));
+  }
+  const std::vector<double> intact(static_cast<std::size_t>(mesh_.element_count()), 1.0);
+  Eigen::SparseMatrix<double> K = assemble_stiffness(intact);
+  Eigen::SparseMatrix<double> Kheld = K;
+  std::vector<char> held(static_cast<std::size_t>(mesh_.dof_count()), 0);
+  for (int d : isostatic_dofs) held[static_cast<std::size_t>(d)] = 1;
+  hold(Kheld, held);
+  Eigen::MatrixXd rhs = -fR;
+  for (int d : isostatic_dofs) rhs.row(d).setZero();
+  solver_.factorize(Kheld);
+  u0_ = solver_.solve(rhs);
+  // The profile is self-equilibrated, so the 3-2-1 reactions vanish and r0 is solver noise; it is
+  // kept and subtracted so the load below equals -sum_e a_e int B^T sigma0 literally.
+  r0_ = fR + K.selfadjointView<Eigen::Lower>() * u0_;
+  relative_residual_ = r0_.cwiseAbs().maxCoeff() / std::max(1e-300, fR.cwiseAbs().maxCoeff());
+  equilibrated_ = true;
+}
+
+void ElasticProblem::set_activity(std::vector<double> volume_fraction) {
+  if (static_cast<int>(volume_fraction.size()) != mesh_.element_count())
+    throw std::invalid_argument("set_activity: one volume fraction per element");
+  for (double& a : volume_fraction) {
+    if (!(a >= 0.0 && a <= 1.0)) throw std::invalid_argument("set_activity: volume fractions must lie in [0, 1]");
+    if (a < kMinVolumeFraction) a = 0.0;
+  }
+  activity_ = std::move(volume_fraction);
+}
+
+void ElasticProblem::set_fixed_dofs(std::vector<int> dofs) { fixed_dofs_ = std::move(dofs); }
+
+std::vector<char> ElasticProblem::live_nodes() const {
+  std::vector<char> live(static_cast<std::size_t>(mesh_.node_count()), 0);
+  for (int e = 0; e < mesh_.element_count(); ++e)
+    if (activity_[static_cast<std::size_t>(e)] > 0)
+      for (int n : mesh_.element(e)) live[static_cast<std::size_t>(n)] = 1;
+  return live;
+}
+
+void ElasticProblem::assemble_and_factorize() {
+  K_ = assemble_stiffness(activity_);
+  const auto live = live_nodes();
+  orphan_.assign(static_cast<std::size_t>(mesh_.dof_count()), 0);
+  std::vector<char> held(static_cast<std::size_t>(mesh_.dof_count()), 0);
+  for (int n = 0; n < mesh_.node_count(); ++n)
+    if (!live[static_cast<std::size_t>(n)])
+      for (int c = 0; c < 3; ++c) orphan_[static_cast<std::size_t>(3 * n + c)] = held[static_cast<std::size_t>(3 * n + c)] = 1;
+  for (int d : fixed_dofs_) held[static_cast<std::size_t>(d)] = 1;
+  hold(K_, held);
+  solver_.factorize(K_);
+}
+
+Eigen::MatrixXd ElasticProblem::element_load(int e) {
+  const Eigen::MatrixXd fR = operators_.stress_load(e, profiles_, shape_);
+  const Eigen::MatrixXd& Ke = operators_.stiffness(e);
+  Eigen::MatrixXd fe = fR;
+  for (Eigen::Index p = 0; p < fe.cols(); ++p) fe.col(p) += Ke * gather(e, u0_.col(p));
+  return fe;
+}
+
+Eigen::MatrixXd ElasticProblem::solve() {
+  if (!equilibrated_) throw std::logic_error("ElasticProblem::solve before equilibrate");
+  // -sum_e a_e (f_R,e + K_e u0_e) = -r0 + sum_e (1 - a_e)(f_R,e + K_e u0_e): only removed material
+  // contributes, which is cheap (few elements per station) and free of cancellation.
+  Eigen::MatrixXd F = -r0_;
+  for (int e = 0; e < mesh_.element_count(); ++e) {
+    const double removed = 1.0 - activity_[static_cast<std::size_t>(e)];
+    if (removed <= 0) continue;
+    const Eigen::MatrixXd fe = element_load(e);
+    const auto nodes = mesh_.element(e);
+    for (std::size_t a = 0; a < nodes.size(); ++a) F.middleRows<3>(3 * nodes[a]) += removed * fe.middleRows<3>(3 * static_cast<Eigen::Index>(a));
+  }
+  for (int d = 0; d < mesh_.dof_count(); ++d)
+    if (orphan_[static_cast<std::size_t>(d)]) F.row(d).setZero();
+  for (int d : fixed_dofs_) F.row(d).setZero();
+  return solver_.solve(F);
+}
+
+std::vector<Vector6d> ElasticProblem::element_stresses(int p, const Eigen::VectorXd& u) const {
+  const Eigen::VectorXd total = u0_.col(p) + u;
+  std::vector<Vector6d> stresses(static_cast<std::size_t>(mesh_.element_count()));
+  for (int e = 0; e < mesh_.element_count(); ++e)
+    stresses[static_cast<std::size_t>(e)] = operators_.mean_stress(e, gather(e, total), &profiles_[static_cast<std::size_t>(p)], shape_);
+  return stresses;
+}
+
+}  // namespace drom::fem

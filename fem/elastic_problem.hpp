@@ -1,0 +1,86 @@
+#pragma once
+// The full-order problem of design.md §1 and §3, in the deal.II style: one class, with
+// setup (mesh, part, material, stress profiles), equilibrate, configure (activity, supports),
+// assemble_and_factorize, solve.
+//
+//   find u on the remaining part, u = 0 on the supports:
+//     int eps(v) : C : eps(u) = - int eps(v) : sigma0        for every admissible v
+//   sigma0 = sigma_R + C : eps(u0), u0 the free stock's response to sigma_R (3-2-1 held).
+//
+// Every profile (one per column) is solved on one factorization.
+#include "fem/element_operators.hpp"
+#include "fem/mesh.hpp"
+#include "fem/part_shape.hpp"
+#include "fem/residual_stress.hpp"
+#include "fem/spd_solver.hpp"
+#include "fem/stiffness_pattern.hpp"
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include <vector>
+
+namespace drom::fem {
+
+class ElasticProblem {
+ public:
+  // Elements whose remaining volume fraction is below this count as removed: a sliver of material
+  // carries no load worth the ill-conditioning it brings.
+  static constexpr double kMinVolumeFraction = 1e-3;
+
+  ElasticProblem(const Mesh& mesh, const PartShape& shape, const Material& material, std::vector<StressProfile> profiles);
+
+  // Step 1: equilibrate each profile on the intact free stock (held 3-2-1 at `isostatic_dofs`).
+  void equilibrate(const std::vector<int>& isostatic_dofs);
+  // Step 2: which material is left (per element, in [0, 1]) and which dofs are fixed.
+  void set_activity(std::vector<double> volume_fraction);
+  void set_fixed_dofs(std::vector<int> dofs);
+  // Step 3.
+  void assemble_and_factorize();
+  // Step 4: displacement since the equilibrated, clamped stock; ndof x profiles. Held dofs are zero.
+  Eigen::MatrixXd solve();
+
+  const Mesh& mesh() const { return mesh_; }
+  const PartShape& shape() const { return shape_; }
+  const std::vector<StressProfile>& profiles() const { return profiles_; }
+  const std::vector<double>& activity() const { return activity_; }
+  // Dofs with no stiffness left (every element around them removed); held at zero.
+  const std::vector<char>& orphan_dofs() const { return orphan_; }
+  // Nodes that still touch material.
+  std::vector<char> live_nodes() const;
+  // u0 (ndof x profiles).
+  const Eigen::MatrixXd& equilibration_displacement() const { return u0_; }
+  // max |f_R + K u0| / max |f_R| over the free dofs after equilibration: how well sigma0 balances.
+  double equilibrium_residual() const { return relative_residual_; }
+
+  // Element-average total stress sigma_R + C eps(u0 + u) for profile p.
+  std::vector<Vector6d> element_stresses(int p, const Eigen::VectorXd& u) const;
+
+  const SolverStats& solver_stats() const { return solver_.stats(); }
+  double assembly_seconds() const { return assembly_seconds_; }
+  Eigen::Index unknowns() const { return static_cast<Eigen::Index>(mesh_.dof_count()); }
+
+ private:
+  Eigen::SparseMatrix<double> assemble_stiffness(const std::vector<double>& fraction);
+  Eigen::MatrixXd element_load(int e);  // f_R,e + K_e u0_e per profile (3n x P)
+  void hold(Eigen::SparseMatrix<double>& K, const std::vector<char>& held) const;
+  Eigen::VectorXd gather(int e, const Eigen::VectorXd& u) const;
+
+  const Mesh& mesh_;
+  PartShape shape_;
+  std::vector<StressProfile> profiles_;
+  ElementOperators operators_;
+  StiffnessPattern pattern_;
+  SpdSolver solver_;
+
+  std::vector<double> activity_;
+  std::vector<int> fixed_dofs_;
+  std::vector<char> orphan_;
+  Eigen::SparseMatrix<double> K_;
+  Eigen::MatrixXd u0_, r0_;
+  double relative_residual_ = 0;
+  double assembly_seconds_ = 0;
+  bool equilibrated_ = false;
+};
+
+}  // namespace drom::fem

@@ -1,0 +1,51 @@
+#include "fem/spd_solver.hpp"
+
+#include <Eigen/CholmodSupport>
+
+#include <chrono>
+#include <stdexcept>
+
+namespace drom::fem {
+
+namespace {
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+struct SpdSolver::Impl {
+  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
+  bool analyzed = false;
+  Eigen::Index size = -1;
+};
+
+SpdSolver::SpdSolver() : impl_(std::make_unique<Impl>()) {}
+SpdSolver::~SpdSolver() = default;
+SpdSolver::SpdSolver(SpdSolver&&) noexcept = default;
+SpdSolver& SpdSolver::operator=(SpdSolver&&) noexcept = default;
+
+void SpdSolver::factorize(const Eigen::SparseMatrix<double>& K) {
+  if (!impl_->analyzed || impl_->size != K.rows()) {
+    const auto t0 = std::chrono::steady_clock::now();
+    impl_->llt.analyzePattern(K);
+    impl_->analyzed = true;
+    impl_->size = K.rows();
+    stats_.analyze_seconds += seconds_since(t0);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  impl_->llt.factorize(K);
+  stats_.factorize_seconds += seconds_since(t0);
+  ++stats_.factorizations;
+  stats_.factor_peak_bytes = std::max(stats_.factor_peak_bytes, impl_->llt.cholmod().memory_usage);
+  if (impl_->llt.info() != Eigen::Success)
+    throw std::runtime_error("stiffness matrix is not positive definite: the part is not held against rigid motion");
+}
+
+Eigen::MatrixXd SpdSolver::solve(const Eigen::MatrixXd& rhs) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Eigen::MatrixXd x = impl_->llt.solve(rhs);
+  stats_.solve_seconds += seconds_since(t0);
+  return x;
+}
+
+}  // namespace drom::fem

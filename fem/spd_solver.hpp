@@ -1,0 +1,36 @@
+#pragma once
+// Sparse SPD solves with CHOLMOD's supernodal Cholesky. The symbolic analysis is done once per
+// pattern; numeric refactorization and multi-right-hand-side solves reuse it.
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include <memory>
+
+namespace drom::fem {
+
+struct SolverStats {
+  double analyze_seconds = 0, factorize_seconds = 0, solve_seconds = 0;
+  std::size_t factor_peak_bytes = 0;  // CHOLMOD's own peak memory
+  int factorizations = 0;
+};
+
+class SpdSolver {
+ public:
+  SpdSolver();
+  ~SpdSolver();
+  SpdSolver(SpdSolver&&) noexcept;
+  SpdSolver& operator=(SpdSolver&&) noexcept;
+
+  // K: lower triangle. Analyzes the pattern on first use, then factorizes numerically.
+  // Throws std::runtime_error if K is not positive definite (a mechanism left unconstrained).
+  void factorize(const Eigen::SparseMatrix<double>& K);
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& rhs);
+  const SolverStats& stats() const { return stats_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  SolverStats stats_;
+};
+
+}  // namespace drom::fem

@@ -1,0 +1,24 @@
+#pragma once
+// Structured 20-node hexahedral meshes of plates and cylindrical panels (any PartShape),
+// optionally graded through the thickness.
+#include "fem/mesh.hpp"
+#include "fem/part_shape.hpp"
+
+#include <vector>
+
+namespace drom::fem {
+
+struct StructuredMeshSpec {
+  int nu = 10, nv = 10, nt = 4;   // elements along u, v and through the thickness
+  // Ratio (bottom element thickness) / (top element thickness); 1 is uniform, > 1 refines near the
+  // machined top face.
+  double thickness_grading = 1.0;
+};
+
+// Element boundaries through the thickness (nt + 1 values from 0 to thickness).
+std::vector<double> thickness_levels(double thickness, int nt, double grading);
+
+// Hex20 mesh of the stock; midside nodes sit on the true (curved) geometry.
+Mesh make_structured_hex_mesh(const PartShape& shape, const StructuredMeshSpec& spec);
+
+}  // namespace drom::fem

@@ -1,0 +1,95 @@
+#include "fem/vtk_output.hpp"
+
+#include "support/atomic_file.hpp"
+
+#include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkCellType.h>
+#include <vtkDoubleArray.h>
+#include <vtkIdList.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridWriter.h>
+
+#include <sstream>
+#include <stdexcept>
+
+namespace drom::fem {
+
+void write_vtu(const std::filesystem::path& path, const Mesh& mesh, const VtuFields& fields, const std::vector<char>& keep) {
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(mesh.node_count());
+  for (int i = 0; i < mesh.node_count(); ++i) {
+    const auto& p = mesh.nodes[static_cast<std::size_t>(i)];
+    points->SetPoint(i, p.x(), p.y(), p.z());
+  }
+  vtkNew<vtkUnstructuredGrid> grid;
+  grid->SetPoints(points);
+  const int cell_type = mesh.type == ElementType::Hex20 ? VTK_QUADRATIC_HEXAHEDRON : VTK_QUADRATIC_TETRA;
+  std::vector<int> kept;
+  for (int e = 0; e < mesh.element_count(); ++e) {
+    if (!keep.empty() && !keep[static_cast<std::size_t>(e)]) continue;
+    kept.push_back(e);
+    vtkNew<vtkIdList> ids;
+    for (int n : mesh.element(e)) ids->InsertNextId(n);
+    grid->InsertNextCell(cell_type, ids);
+  }
+
+  for (const auto& [name, values] : fields.point_vectors) {
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(name.c_str());
+    a->SetNumberOfComponents(3);
+    a->SetNumberOfTuples(mesh.node_count());
+    for (int i = 0; i < mesh.node_count(); ++i) a->SetTuple3(i, values[3 * i], values[3 * i + 1], values[3 * i + 2]);
+    grid->GetPointData()->AddArray(a);
+  }
+  for (const auto& [name, values] : fields.point_scalars) {
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(name.c_str());
+    a->SetNumberOfTuples(mesh.node_count());
+    for (int i = 0; i < mesh.node_count(); ++i) a->SetValue(i, values[static_cast<std::size_t>(i)]);
+    grid->GetPointData()->AddArray(a);
+  }
+  for (const auto& [name, values] : fields.cell_scalars) {
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(name.c_str());
+    a->SetNumberOfTuples(static_cast<vtkIdType>(kept.size()));
+    for (std::size_t k = 0; k < kept.size(); ++k) a->SetValue(static_cast<vtkIdType>(k), values[static_cast<std::size_t>(kept[k])]);
+    grid->GetCellData()->AddArray(a);
+  }
+  for (const auto& [name, values] : fields.cell_tensors) {
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(name.c_str());
+    a->SetNumberOfComponents(9);
+    a->SetNumberOfTuples(static_cast<vtkIdType>(kept.size()));
+    for (std::size_t k = 0; k < kept.size(); ++k) {
+      const Vector6d& s = values[static_cast<std::size_t>(kept[k])];
+      const double t[9] = {s[0], s[5], s[4], s[5], s[1], s[3], s[4], s[3], s[2]};
+      a->SetTuple(static_cast<vtkIdType>(k), t);
+    }
+    grid->GetCellData()->AddArray(a);
+  }
+
+  AtomicFile file(path);
+  vtkNew<vtkXMLUnstructuredGridWriter> writer;
+  writer->SetFileName(file.temporary_path().c_str());
+  writer->SetInputData(grid);
+  writer->SetDataModeToAppended();
+  writer->SetCompressorTypeToZLib();
+  if (writer->Write() != 1) throw std::runtime_error("cannot write " + path.string());
+  file.commit();
+}
+
+void PvdCollection::write(const std::filesystem::path& path) const {
+  std::ostringstream xml;
+  xml << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+  for (const auto& [time, file] : entries_)
+    xml << "    <DataSet timestep=\"" << time << "\" part=\"0\" file=\"" << file.generic_string() << "\"/>\n";
+  xml << "  </Collection>\n</VTKFile>\n";
+  write_file_atomically(path, xml.str());
+}
+
+}  // namespace drom::fem
