@@ -1,0 +1,139 @@
+#include "apps/case_file.hpp"
+
+#include "apps/case_reader.hpp"
+#include "apps/default_case.hpp"
+#include "support/input_error.hpp"
+
+#include <fstream>
+#include <sstream>
+
+namespace drom::app {
+
+const char* embedded_default_case() { return kDefaultCaseToml; }
+
+namespace {
+
+std::filesystem::path relative_to(const std::string& origin, const std::string& file) {
+  std::filesystem::path p(file);
+  if (p.is_absolute() || origin.empty() || origin.front() == '<') return p;
+  return std::filesystem::path(origin).parent_path() / p;
+}
+
+void read_part(CaseReader& r, Case& c) {
+  c.shape = r.choice("part.shape", {"plate", "panel", "stl"});
+  if (c.shape == "stl") {
+    c.stl = relative_to(r.origin(), r.text("part.stl"));
+    return;
+  }
+  c.length_x = r.real("part.length_x", Range::positive());
+  c.length_y = r.real("part.length_y", Range::positive());
+  c.thickness = r.real("part.thickness", Range::positive());
+  if (c.shape == "panel") {
+    c.outer_radius = r.real("part.outer_radius", Range::positive());
+    if (c.outer_radius <= c.thickness) r.fail("part.outer_radius", "must exceed part.thickness");
+    if (c.length_x / c.outer_radius > 3.0) r.fail("part.length_x", "the panel's arc spans more than 3 rad: expected a shallow panel");
+  }
+}
+
+void read_mesh(CaseReader& r, Case& c) {
+  c.element = r.choice("mesh.element", {"hex20", "tet10"}, c.shape == "stl" ? "tet10" : "hex20");
+  if (c.element == "hex20") {
+    if (c.shape == "stl") r.fail("mesh.element", "hex20 meshes are structured: STL parts need \"tet10\"");
+    c.nx = static_cast<int>(r.integer("mesh.nx", 1, 2000));
+    c.ny = static_cast<int>(r.integer("mesh.ny", 1, 2000));
+    c.nz = static_cast<int>(r.integer("mesh.nz", 1, 200));
+    c.thickness_grading = r.real("mesh.thickness_grading", Range::closed(0.05, 20), 1.0);
+  } else {
+    c.tet_max_volume = r.real("mesh.tet_max_volume", Range::positive());
+    c.tet_radius_edge_ratio = r.real("mesh.tet_radius_edge_ratio", Range::closed(1.1, 10), 1.4);
+  }
+}
+
+void read_stress(CaseReader& r, Case& c) {
+  c.parity = r.choice("stress.parity", {"even", "odd", "all"});
+  c.max_degree = static_cast<int>(r.integer("stress.max_degree", c.parity == "odd" ? 3 : 2, 20));
+  int count = 0;
+  for (int j = 2; j <= c.max_degree; ++j)
+    if (c.parity == "all" || (c.parity == "even") == (j % 2 == 0)) ++count;
+  if (r.has("stress.table")) {
+    c.table = relative_to(r.origin(), r.text("stress.table"));
+    if (r.has("stress.sigma11") || r.has("stress.sigma22")) r.fail("stress.table", "give either a table or sigma11/sigma22 coefficients, not both");
+    return;
+  }
+  const Range mpa = Range::closed(-2000, 2000);
+  c.sigma11 = r.reals("stress.sigma11", mpa);
+  c.sigma22 = r.reals("stress.sigma22", mpa);
+  for (const char* key : {"stress.sigma11", "stress.sigma22"}) {
+    const auto& v = std::string(key) == "stress.sigma11" ? c.sigma11 : c.sigma22;
+    if (static_cast<int>(v.size()) != count)
+      r.fail(key, "has " + std::to_string(v.size()) + " coefficients; the " + c.parity + " basis up to degree " + std::to_string(c.max_degree) +
+                      " has " + std::to_string(count));
+  }
+}
+
+void read_pocket(CaseReader& r, Case& c) {
+  c.pocket_x = r.real("pocket.x_min", Range::non_negative());
+  c.pocket_y = r.real("pocket.y_min", Range::non_negative());
+  c.pocket_length_x = r.real("pocket.length_x", Range::positive());
+  c.pocket_length_y = r.real("pocket.length_y", Range::positive());
+  c.pocket_depth = r.real("pocket.depth", Range::positive());
+  if (c.shape != "stl") {
+    if (c.pocket_x + c.pocket_length_x > c.length_x) r.fail("pocket.length_x", "the pocket extends past the part (x_min + length_x > part.length_x)");
+    if (c.pocket_y + c.pocket_length_y > c.length_y) r.fail("pocket.length_y", "the pocket extends past the part (y_min + length_y > part.length_y)");
+    if (c.pocket_depth >= c.thickness) r.fail("pocket.depth", "must be less than part.thickness");
+  }
+}
+
+void read_clamps(CaseReader& r, Case& c) {
+  const std::size_t n = r.table_count("clamps");
+  if (n == 0) r.fail("clamps", "missing; expected at least one [[clamps]] table holding the part");
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::string k = "clamps." + std::to_string(i) + ".";
+    ClampSpec clamp;
+    clamp.face = r.choice(k + "face", {"bottom", "top", "x_min", "x_max", "y_min", "y_max"});
+    if (r.has(k + "box")) {
+      const auto b = r.reals(k + "box", Range::non_negative());
+      if (b.size() != 4 || b[0] >= b[1] || b[2] >= b[3]) r.fail(k + "box", "expected [u_min, u_max, v_min, v_max] with min < max");
+      clamp.box = std::array<double, 4>{b[0], b[1], b[2], b[3]};
+    }
+    clamp.dofs = r.choice(k + "dofs", {"xyz", "z", "xy"}, "xyz");
+    c.clamps.push_back(clamp);
+  }
+}
+
+}  // namespace
+
+Case load_case(const std::optional<std::filesystem::path>& path, const std::vector<std::string>& overrides) {
+  std::string text, origin;
+  if (path) {
+    std::ifstream in(*path);
+    if (!in) throw InputError(path->string() + ": cannot open case file");
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    text = ss.str();
+    origin = path->string();
+  } else {
+    text = kDefaultCaseToml;
+    origin = "<embedded default case>";
+  }
+  CaseReader r(text, origin);
+  for (const auto& o : overrides) r.apply_override(o);
+
+  Case c;
+  c.origin = origin;
+  c.name = r.text("name");
+  c.description = r.text("description", "");
+  read_part(r, c);
+  c.young_modulus = r.real("material.young_modulus", Range::positive());
+  c.poisson_ratio = r.real("material.poisson_ratio", Range{-1, 0.5, true, true});
+  read_mesh(r, c);
+  read_stress(r, c);
+  read_pocket(r, c);
+  c.removal_criterion = r.choice("removal.criterion", {"centroid", "volume_fraction"}, "volume_fraction");
+  read_clamps(r, c);
+  r.finish();
+  c.resolved_toml = r.resolved_text();
+  return c;
+}
+
+}  // namespace drom::app

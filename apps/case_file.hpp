@@ -1,0 +1,59 @@
+#pragma once
+// A drom case: the part, its mesh, material, residual stress, pocket and clamps, read from TOML
+// (docs/case-files.md lists every key, its unit and its range).
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace drom::app {
+
+struct ClampSpec {
+  std::string face;                   // bottom, top, x_min, x_max, y_min, y_max (parametric faces)
+  std::optional<std::array<double, 4>> box;  // [u_min, u_max, v_min, v_max] restricting the face, mm
+  std::string dofs = "xyz";
+};
+
+struct Case {
+  std::string name, description;
+  std::string origin;         // file path or "<embedded default case>"
+  std::string resolved_toml;  // the case after --set overrides, verbatim for outputs
+
+  // [part]
+  std::string shape;  // plate, panel, stl
+  double length_x = 0, length_y = 0, thickness = 0, outer_radius = 0;
+  std::filesystem::path stl;
+
+  // [material]
+  double young_modulus = 0, poisson_ratio = 0;
+
+  // [mesh]
+  std::string element;  // hex20, tet10
+  int nx = 0, ny = 0, nz = 0;
+  double thickness_grading = 1;
+  double tet_max_volume = 0, tet_radius_edge_ratio = 1.4;
+
+  // [stress]
+  std::string parity;  // even, odd, all
+  int max_degree = 0;
+  std::vector<double> sigma11, sigma22;  // MPa, one per degree of the basis
+  std::filesystem::path table;           // optional measured profile, fitted to the basis
+
+  // [pocket]
+  double pocket_x = 0, pocket_y = 0, pocket_length_x = 0, pocket_length_y = 0, pocket_depth = 0;
+
+  // [removal]
+  std::string removal_criterion;  // centroid, volume_fraction
+
+  std::vector<ClampSpec> clamps;
+};
+
+// Reads a case from a file, or the embedded default (flat plate) when `path` is empty, applies the
+// "key=value" overrides, validates everything. Throws InputError.
+Case load_case(const std::optional<std::filesystem::path>& path, const std::vector<std::string>& overrides);
+
+// The text of cases/flat_plate.toml, compiled in.
+const char* embedded_default_case();
+
+}  // namespace drom::app

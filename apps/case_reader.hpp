@@ -1,0 +1,60 @@
+#pragma once
+// Typed, validated access to a TOML case file. Every accessor records the key it read; finish()
+// then rejects any key nobody asked for, so a typo is an error rather than a silent default.
+// Errors are InputError naming the file, the line and the dotted key.
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace drom::app {
+
+struct Range {
+  double min = -1e300, max = 1e300;
+  bool min_exclusive = false, max_exclusive = false;
+  static Range positive() { return {0, 1e300, true, false}; }
+  static Range non_negative() { return {0, 1e300, false, false}; }
+  static Range closed(double a, double b) { return {a, b, false, false}; }
+  static Range open_closed(double a, double b) { return {a, b, true, false}; }
+  std::string describe() const;
+  bool contains(double v) const;
+};
+
+class CaseReader {
+ public:
+  // `origin` names the text in messages (a path, or "<embedded default case>").
+  CaseReader(const std::string& text, std::string origin);
+  ~CaseReader();
+  CaseReader(const CaseReader&) = delete;
+  CaseReader& operator=(const CaseReader&) = delete;
+
+  // Applies one "dotted.key=value" override. The value is read as TOML ("3", "[1, 2]", "'x'"),
+  // or as a bare string when it is not valid TOML. Unknown keys are caught by finish().
+  void apply_override(const std::string& assignment);
+
+  bool has(const std::string& key) const;
+  double real(const std::string& key, Range range);
+  double real(const std::string& key, Range range, double fallback);
+  long long integer(const std::string& key, long long min, long long max);
+  long long integer(const std::string& key, long long min, long long max, long long fallback);
+  bool boolean(const std::string& key, bool fallback);
+  std::string text(const std::string& key, std::optional<std::string> fallback = std::nullopt);
+  std::string choice(const std::string& key, const std::vector<std::string>& allowed, std::optional<std::string> fallback = std::nullopt);
+  std::vector<double> reals(const std::string& key, Range range, std::optional<std::vector<double>> fallback = std::nullopt);
+  // Number of tables in an array of tables ([[name]]); 0 when absent.
+  std::size_t table_count(const std::string& key);
+
+  // Throws on the first key present in the file that no accessor read.
+  void finish() const;
+  [[noreturn]] void fail(const std::string& key, const std::string& message) const;
+  const std::string& origin() const { return origin_; }
+  // The case after overrides, as TOML (for summaries and for the offline database).
+  std::string resolved_text() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::string origin_;
+};
+
+}  // namespace drom::app

@@ -1,0 +1,81 @@
+#include "apps/case_setup.hpp"
+
+#include "fem/node_sets.hpp"
+#include "fem/structured_mesh.hpp"
+#include "fem/tet_mesh.hpp"
+#include "support/input_error.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace drom::app {
+
+fem::ProfileParity parity_of(const Case& c) {
+  if (c.parity == "even") return fem::ProfileParity::Even;
+  if (c.parity == "odd") return fem::ProfileParity::Odd;
+  return fem::ProfileParity::All;
+}
+
+PartModel build_part(const Case& c) {
+  PartModel part;
+  if (c.shape == "stl") {
+    const fem::Plc plc = fem::read_closed_stl(c.stl);
+    Eigen::Vector3d lo = plc.points.front(), hi = lo;
+    for (const auto& p : plc.points) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    part.shape = fem::PartShape::block(lo, hi);
+    part.mesh = fem::make_tet_mesh(plc, {c.tet_max_volume, c.tet_radius_edge_ratio, 0});
+  } else {
+    part.shape = c.shape == "panel" ? fem::PartShape::panel(c.length_x, c.length_y, c.thickness, c.outer_radius)
+                                    : fem::PartShape::plate(c.length_x, c.length_y, c.thickness);
+    if (c.element == "hex20") {
+      part.mesh = fem::make_structured_hex_mesh(part.shape, {c.nx, c.ny, c.nz, c.thickness_grading});
+    } else {
+      if (c.shape == "panel") throw InputError(c.origin + ": mesh.element: tet10 meshes of panels need an STL of the panel (part.shape = \"stl\")");
+      part.mesh = fem::make_tet_mesh(fem::layered_box_plc({0, 0, 0}, {c.length_x, c.length_y, c.thickness}, {c.thickness - c.pocket_depth}),
+                                     {c.tet_max_volume, c.tet_radius_edge_ratio, 0});
+    }
+  }
+  part.material = {c.young_modulus, c.poisson_ratio};
+  part.degrees = fem::legendre_degrees(parity_of(c), c.max_degree);
+  if (!c.table.empty())
+    part.profile = fem::fit_profile(fem::read_profile_table(c.table), part.shape.thickness(), part.degrees);
+  else
+    part.profile = {part.degrees, c.sigma11, c.sigma22};
+  return part;
+}
+
+std::vector<int> clamp_dofs(const Case& c, const PartModel& part) {
+  const auto faces = fem::boundary_faces(part.mesh);
+  const auto& shape = part.shape;
+  const double tol = 1e-6 * std::max({shape.length_u(), shape.length_v(), shape.thickness()});
+  std::vector<int> dofs;
+  for (std::size_t i = 0; i < c.clamps.size(); ++i) {
+    const ClampSpec& clamp = c.clamps[i];
+    const auto nodes = fem::face_nodes_where(part.mesh, faces, [&](const Eigen::Vector3d& x) {
+      const Eigen::Vector3d p = shape.to_parametric(x);
+      bool on_face = false;
+      if (clamp.face == "bottom") on_face = std::abs(p.z()) < tol;
+      else if (clamp.face == "top") on_face = std::abs(p.z() - shape.thickness()) < tol;
+      else if (clamp.face == "x_min") on_face = std::abs(p.x()) < tol;
+      else if (clamp.face == "x_max") on_face = std::abs(p.x() - shape.length_u()) < tol;
+      else if (clamp.face == "y_min") on_face = std::abs(p.y()) < tol;
+      else if (clamp.face == "y_max") on_face = std::abs(p.y() - shape.length_v()) < tol;
+      if (!on_face || !clamp.box) return on_face;
+      const auto& b = *clamp.box;
+      return p.x() >= b[0] - tol && p.x() <= b[1] + tol && p.y() >= b[2] - tol && p.y() <= b[3] + tol;
+    });
+    if (nodes.empty())
+      throw InputError(c.origin + ": clamps." + std::to_string(i) + ": face \"" + clamp.face +
+                       "\" (with its box) contains no element face of the mesh: widen the box or refine the mesh");
+    const auto more = fem::node_dofs(nodes, clamp.dofs != "z", clamp.dofs != "z", clamp.dofs != "xy");
+    dofs.insert(dofs.end(), more.begin(), more.end());
+  }
+  std::sort(dofs.begin(), dofs.end());
+  dofs.erase(std::unique(dofs.begin(), dofs.end()), dofs.end());
+  return dofs;
+}
+
+}  // namespace drom::app

@@ -1,0 +1,63 @@
+// drom: distortion-aware machining of thin parts. See README.md and docs/.
+#include "apps/commands.hpp"
+#include "support/input_error.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+int main(int argc, char** argv) {
+  CLI::App app{"drom: predicts and corrects the distortion of thin parts while they are machined"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "drom 0.1.0");
+
+  drom::app::CommandOptions options;
+  std::string case_path;
+  struct Sub {
+    const char* name;
+    const char* help;
+    int (*run)(const drom::app::CommandOptions&);
+  };
+  const Sub subs[] = {
+      {"run", "run the main job on a case (default: the embedded flat-plate case)", drom::app::run_command},
+      {"mesh", "mesh the case's part and write it with its clamps to VTK", drom::app::mesh_command},
+      {"check", "validate a case file and print it with every override applied", drom::app::check_command},
+  };
+  std::vector<std::pair<CLI::App*, const Sub*>> commands;
+  for (const auto& sub : subs) {
+    CLI::App* cmd = app.add_subcommand(sub.name, sub.help);
+    cmd->add_option("case", case_path, "case file (TOML); see cases/ and docs/case-files.md");
+    cmd->add_option("--set", options.overrides, "override a case value, e.g. --set mesh.nx=20 (repeatable)")->take_all();
+    cmd->add_option("--out", options.out, "output folder")->capture_default_str();
+    cmd->add_flag("--quiet", options.quiet, "no progress or table, only files");
+    commands.emplace_back(cmd, &sub);
+  }
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return 2;
+  }
+  if (!case_path.empty()) options.case_path = case_path;
+
+  for (const auto& [cmd, sub] : commands) {
+    if (!cmd->parsed()) continue;
+    try {
+      return sub->run(options);
+    } catch (const drom::InputError& e) {
+      std::cerr << "drom " << sub->name << ": error: " << e.what() << "\n";
+      return 2;
+    } catch (const std::exception& e) {
+      std::cerr << "drom " << sub->name << ": failed: " << e.what() << "\n";
+      return 1;
+    }
+  }
+  return 2;
+}
