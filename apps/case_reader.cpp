@@ -103,13 +103,15 @@ void CaseReader::apply_override(const std::string& assignment) {
 }
 
 void CaseReader::fail(const std::string& key, const std::string& message) const {
+  // "key = value: expected ..." reads better than "key: = value: expected ..."
+  const std::string sep = message.rfind("= ", 0) == 0 ? " " : ": ";
   std::ostringstream msg;
   if (impl_->overridden.count(key)) {
-    msg << "--set " << key << ": " << message;
+    msg << "--set " << key << sep << message;
   } else if (auto* node = impl_->find(key); node && node->source().begin.line > 0) {
-    msg << origin_ << ":" << node->source().begin.line << ": " << key << ": " << message;
+    msg << origin_ << ":" << node->source().begin.line << ": " << key << sep << message;
   } else {
-    msg << origin_ << ": " << key << ": " << message;
+    msg << origin_ << ": " << key << sep << message;
   }
   throw InputError(msg.str());
 }

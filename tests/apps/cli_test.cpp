@@ -1,0 +1,114 @@
+// The drom binary itself: exit codes and messages for bad input, and a small end-to-end run.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sys/wait.h>
+
+namespace {
+
+struct Result {
+  int exit_code;
+  std::string output;  // stdout and stderr
+};
+
+Result drom(const std::string& args) {
+  const std::string cmd = std::string(DROM_BINARY) + " " + args + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf;
+  while (std::fgets(buf.data(), buf.size(), pipe)) out += buf.data();
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+std::filesystem::path temp_dir() {
+  const auto dir = std::filesystem::temp_directory_path() / "drom_cli_tests";
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+// A 40 x 30 x 6 box as an ASCII STL; `drop_last` leaves a hole.
+std::filesystem::path box_stl(const std::string& name, bool drop_last) {
+  const double X = 40, Y = 30, Z = 6;
+  const double v[8][3] = {{0, 0, 0}, {X, 0, 0}, {X, Y, 0}, {0, Y, 0}, {0, 0, Z}, {X, 0, Z}, {X, Y, Z}, {0, Y, Z}};
+  const int tris[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                           {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+  const auto path = temp_dir() / name;
+  std::ofstream out(path);
+  out << "solid box\n";
+  for (int t = 0; t < (drop_last ? 11 : 12); ++t) {
+    out << " facet normal 0 0 0\n  outer loop\n";
+    for (int k = 0; k < 3; ++k) out << "   vertex " << v[tris[t][k]][0] << " " << v[tris[t][k]][1] << " " << v[tris[t][k]][2] << "\n";
+    out << "  endloop\n endfacet\n";
+  }
+  out << "endsolid box\n";
+  return path;
+}
+
+std::filesystem::path stl_case(const std::filesystem::path& stl) {
+  const auto path = temp_dir() / (stl.stem().string() + ".toml");
+  std::ofstream(path) << "name = 'box'\n[part]\nshape = 'stl'\nstl = '" << stl.string()
+                      << "'\n[material]\nyoung_modulus = 71700.0\npoisson_ratio = 0.33\n[mesh]\ntet_max_volume = 20.0\n"
+                         "[stress]\nparity = 'even'\nmax_degree = 4\nsigma11 = [-50.0, 20.0]\nsigma22 = [-50.0, 20.0]\n"
+                         "[pocket]\nx_min = 5.0\ny_min = 5.0\nlength_x = 30.0\nlength_y = 20.0\ndepth = 1.5\n"
+                         "[[clamps]]\nface = 'bottom'\n";
+  return path;
+}
+
+}  // namespace
+
+TEST(Cli, UnknownKeyExitsWithTwoAndNamesIt) {
+  const auto r = drom("check --set mesh.nxx=3");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("mesh.nxx: unknown key"), std::string::npos) << r.output;
+}
+
+TEST(Cli, NegativeThicknessExitsWithTwoAndNamesTheLine) {
+  const auto path = temp_dir() / "negative.toml";
+  std::ofstream(path) << "name = 'x'\n[part]\nshape = 'plate'\nlength_x = 100.0\nlength_y = 100.0\nthickness = -10.0\n";
+  const auto r = drom("run " + path.string() + " --out " + (temp_dir() / "neg_out").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("negative.toml:6: part.thickness = -10.0: expected a number > 0"), std::string::npos) << r.output;
+}
+
+TEST(Cli, OpenStlExitsWithTwo) {
+  const auto r = drom("mesh " + stl_case(box_stl("open_box.stl", true)).string() + " --out " + (temp_dir() / "open_out").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("open_box.stl: surface is not closed"), std::string::npos) << r.output;
+}
+
+TEST(Cli, ClosedStlIsMeshedWithTets) {
+  const auto out = temp_dir() / "closed_out";
+  const auto r = drom("mesh " + stl_case(box_stl("closed_box.stl", false)).string() + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary["element"], "tet10");
+  EXPECT_GT(summary["elements"].get<int>(), 50);
+  EXPECT_TRUE(std::filesystem::exists(out / "mesh.vtu"));
+}
+
+TEST(Cli, UsageErrorsExitWithTwo) {
+  EXPECT_EQ(drom("").exit_code, 2);
+  EXPECT_EQ(drom("run --no-such-flag").exit_code, 2);
+  EXPECT_EQ(drom("run /no/such/case.toml").exit_code, 2);
+  EXPECT_EQ(drom("--help").exit_code, 0);
+}
+
+TEST(Cli, RunWritesVtkAndSummaryOnACoarsePlate) {
+  const auto out = temp_dir() / "run_out";
+  std::filesystem::remove_all(out);
+  const auto r = drom("run --set mesh.nx=10 --set mesh.ny=10 --set clamps.0.box=[0,100,0,100] --set clamps.1.box=[900,1000,0,100] "
+                      "--set clamps.2.box=[0,100,900,1000] --set clamps.3.box=[900,1000,900,1000] --quiet --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"run.pvd", "run_0_intact.vtu", "run_1_thinned_clamped.vtu", "run_2_thinned_free.vtu", "summary.json"})
+    EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
+  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_LT(s["intact_clamped_max_displacement_mm"].get<double>(), 1e-9);
+  EXPECT_LT(s["free_plate_curvature_per_mm"]["relative_error"].get<double>(), 0.01);
+  EXPECT_GT(s["thinned_clamped_max_vertical_displacement_mm"].get<double>(), 0.1);
+}
