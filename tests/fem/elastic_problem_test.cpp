@@ -10,11 +10,18 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 using namespace drom::fem;
 
 namespace {
+
+std::string sci(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2e", v);
+  return buf;
+}
 
 const Material kAluminium{71700.0, 0.33};
 
@@ -100,14 +107,18 @@ TEST(PatchTest, DistortedHex20ReproducesLinearField) {
   Mesh mesh = make_structured_hex_mesh(PartShape::plate(10, 10, 10), {3, 3, 3, 1.0});
   distort(mesh, 0.8, 7);
   for (double v : element_volumes(mesh)) ASSERT_GT(v, 0);
-  EXPECT_LT(patch_test_error(mesh), 1e-10);
+  const double err = patch_test_error(mesh);
+  RecordProperty("relative_error", sci(err));
+  EXPECT_LT(err, 1e-10);
 }
 
 TEST(PatchTest, DistortedTet10ReproducesLinearField) {
   Mesh mesh = make_tet_mesh(layered_box_plc({0, 0, 0}, {10, 10, 10}, {}), {4.0, 1.4, 0});
   distort(mesh, 0.2, 11);
   for (double v : element_volumes(mesh)) ASSERT_GT(v, 0);
-  EXPECT_LT(patch_test_error(mesh), 1e-10);
+  const double err = patch_test_error(mesh);
+  RecordProperty("relative_error", sci(err));
+  EXPECT_LT(err, 1e-10);
 }
 
 namespace {
@@ -133,7 +144,9 @@ TEST(IntactStock, ClampedHex20PlateDoesNotMove) {
   const auto faces = boundary_faces(mesh);
   problem.set_fixed_dofs(node_dofs(face_nodes_where(mesh, faces, [](const Eigen::Vector3d& c) { return c.z() < 1e-9; })));
   problem.assemble_and_factorize();
-  EXPECT_LT(max_abs(problem.solve()), 1e-9);
+  const double moved = max_abs(problem.solve());
+  RecordProperty("max_displacement_mm", sci(moved));
+  EXPECT_LT(moved, 1e-9);
 }
 
 TEST(IntactStock, ClampedPanelAndTetPartDoNotMove) {
@@ -185,6 +198,7 @@ TEST(LayerRemoval, Hex20CurvatureMatchesClosedForm) {
   const auto r = layer_removal(make_structured_hex_mesh(shape, {20, 20, 5, 1.0}), shape, profile, 2.0, RemovalCriterion::Centroid);
   RecordProperty("kappa_fe", std::to_string(r.fe.x()));
   RecordProperty("kappa_exact", std::to_string(r.exact.x()));
+  RecordProperty("relative_error", sci(relative_error(r)));
   EXPECT_LT(relative_error(r), 0.01) << r.fe.transpose() << " vs " << r.exact.transpose();
   EXPECT_GT(std::abs(r.exact.x()), 1e-6);
 }
@@ -212,6 +226,7 @@ TEST(LayerRemoval, Tet10CurvatureMatchesClosedForm) {
   const Mesh mesh = make_tet_mesh(layered_box_plc({0, 0, 0}, {100, 100, 10}, {8.0}), {12.0, 1.4, 0});
   const auto r = layer_removal(mesh, shape, profile, 2.0, RemovalCriterion::Centroid);
   RecordProperty("tets", mesh.element_count());
+  RecordProperty("relative_error", sci(relative_error(r)));
   EXPECT_LT(relative_error(r), 0.02) << r.fe.transpose() << " vs " << r.exact.transpose();
 }
 
@@ -233,5 +248,7 @@ TEST(Superposition, ProfileResponseIsWeightedSumOfUnitResponses) {
   const Eigen::VectorXd direct = solve({profile}).col(0);
   const Eigen::VectorXd combined = units * profile_weights(profile);
   EXPECT_GT(direct.cwiseAbs().maxCoeff(), 1e-3);
-  EXPECT_LT((combined - direct).cwiseAbs().maxCoeff() / direct.cwiseAbs().maxCoeff(), 1e-10);
+  const double err = (combined - direct).cwiseAbs().maxCoeff() / direct.cwiseAbs().maxCoeff();
+  RecordProperty("relative_error", sci(err));
+  EXPECT_LT(err, 1e-10);
 }
