@@ -11,8 +11,8 @@ namespace {
 std::filesystem::path sibling_temporary(const std::filesystem::path& destination) {
   // Same folder (rename is atomic only within one file system); the pid keeps parallel writers apart.
   // The extension is kept because some writers (VTK) pick the format from it.
-  auto name = "." + destination.stem().string() + ".tmp" + std::to_string(::getpid()) +
-              destination.extension().string();
+  std::string name(".");
+  name.append(destination.stem().string()).append(".tmp").append(std::to_string(::getpid())).append(destination.extension().string());
   return destination.parent_path() / name;
 }
 
