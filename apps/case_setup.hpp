@@ -3,7 +3,7 @@
 #include "apps/case_file.hpp"
 #include "fem/element_operators.hpp"
 #include "fem/mesh.hpp"
-#include "fem/part_shape.hpp"
+#include "levelset/part_shape.hpp"
 #include "fem/residual_stress.hpp"
 
 #include <vector>

@@ -10,7 +10,7 @@
 // Every profile (one per column) is solved on one factorization.
 #include "fem/element_operators.hpp"
 #include "fem/mesh.hpp"
-#include "fem/part_shape.hpp"
+#include "levelset/part_shape.hpp"
 #include "fem/residual_stress.hpp"
 #include "fem/spd_solver.hpp"
 #include "fem/stiffness_pattern.hpp"

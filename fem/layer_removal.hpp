@@ -3,7 +3,7 @@
 // the free remaining plate (the FE core's reference, issue 2 check 3), and the curvature measured
 // on an FE displacement field.
 #include "fem/mesh.hpp"
-#include "fem/part_shape.hpp"
+#include "levelset/part_shape.hpp"
 #include "fem/residual_stress.hpp"
 
 #include <Eigen/Core>

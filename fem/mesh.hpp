@@ -1,12 +1,17 @@
 #pragma once
 // A volume mesh of quadratic elements. Node ordering inside an element follows VTK's
 // (VTK_QUADRATIC_HEXAHEDRON, VTK_QUADRATIC_TETRA) so meshes go to ParaView unchanged.
+#include "levelset/part_shape.hpp"
+
 #include <Eigen/Core>
 
 #include <span>
 #include <vector>
 
 namespace drom::fem {
+
+// The stock's geometry is described upstream, where material removal is computed.
+using levelset::PartShape;
 
 enum class ElementType { Hex20, Tet10 };
 

@@ -1,7 +1,7 @@
 #pragma once
 // Biaxial residual-stress profiles through the thickness in a Legendre basis (design.md §1):
 // sigma_R = sigma11(s) e1(x)e1 + sigma22(s) e2(x)e2, sigma_ii(s) = sum_j a_ij P_j(s), j >= 2.
-#include "fem/part_shape.hpp"
+#include "levelset/part_shape.hpp"
 
 #include <Eigen/Core>
 
@@ -9,6 +9,8 @@
 #include <vector>
 
 namespace drom::fem {
+
+using levelset::PartShape;
 
 double legendre(int degree, double s);
 

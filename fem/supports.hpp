@@ -2,7 +2,7 @@
 // Isostatic (3-2-1) supports and the best-fit rigid alignment a metrology lab applies to a
 // free part's measured shape (design.md §3).
 #include "fem/mesh.hpp"
-#include "fem/part_shape.hpp"
+#include "levelset/part_shape.hpp"
 
 #include <Eigen/Core>
 

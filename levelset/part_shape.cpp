@@ -1,8 +1,10 @@
-#include "fem/part_shape.hpp"
+#include "levelset/part_shape.hpp"
+
+#include <algorithm>
 
 #include <cmath>
 
-namespace drom::fem {
+namespace drom::levelset {
 
 PartShape PartShape::plate(double lx, double ly, double thickness) {
   PartShape s;
@@ -58,4 +60,17 @@ Eigen::Matrix3d PartShape::local_frame(const Eigen::Vector3d& x) const {
   return frame;
 }
 
-}  // namespace drom::fem
+double PartShape::signed_distance(const Eigen::Vector3d& x) const {
+  // Box in parametric coordinates; for a panel u is an arc length at the outer radius, converted to
+  // a length at the point's own radius so the distance to the end faces stays metric.
+  const Eigen::Vector3d p = to_parametric(x);
+  double du_scale = 1.0;
+  if (kind_ == Kind::Panel) du_scale = (outer_radius_ - thickness_ + p.z()) / outer_radius_;
+  const Eigen::Vector3d half(0.5 * lu_, 0.5 * lv_, 0.5 * thickness_);
+  Eigen::Vector3d q = (p - half).cwiseAbs() - half;
+  q.x() *= du_scale;
+  const Eigen::Vector3d outside = q.cwiseMax(0.0);
+  return outside.norm() + std::min(q.maxCoeff(), 0.0);
+}
+
+}  // namespace drom::levelset

@@ -4,7 +4,7 @@
 // the bottom (inner) face. Residual-stress profiles, clamps and pockets are all stated in p.
 #include <Eigen/Core>
 
-namespace drom::fem {
+namespace drom::levelset {
 
 class PartShape {
  public:
@@ -30,6 +30,9 @@ class PartShape {
   double reduced_thickness(const Eigen::Vector3d& x) const;
   // Columns: e1 (along u), e2 (along v), e3 (outward thickness normal) at x.
   Eigen::Matrix3d local_frame(const Eigen::Vector3d& x) const;
+  // Signed distance to the stock (negative inside); exact for plates and blocks away from edges and
+  // corners, and for panels through the thickness and at the end faces. Exact at the surface.
+  double signed_distance(const Eigen::Vector3d& x) const;
 
  private:
   Kind kind_ = Kind::Plate;
@@ -37,4 +40,4 @@ class PartShape {
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
 };
 
-}  // namespace drom::fem
+}  // namespace drom::levelset
