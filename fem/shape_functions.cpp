@@ -103,14 +103,18 @@ void tet10(const Eigen::Vector3d& p, Eigen::VectorXd& N, Eigen::MatrixX3d& dN) {
 
 }  // namespace
 
-std::vector<QuadraturePoint> hex_gauss_rule(int n) {
-  std::vector<double> x, w;
-  gauss_legendre(n, x, w);
+std::vector<QuadraturePoint> hex_gauss_rule(int n) { return hex_gauss_rule(n, n, n); }
+
+std::vector<QuadraturePoint> hex_gauss_rule(int nx, int ny, int nz) {
+  std::vector<double> x, wx, y, wy, z, wz;
+  gauss_legendre(nx, x, wx);
+  gauss_legendre(ny, y, wy);
+  gauss_legendre(nz, z, wz);
   std::vector<QuadraturePoint> rule;
-  rule.reserve(static_cast<std::size_t>(n * n * n));
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) rule.push_back({Eigen::Vector3d(x[i], x[j], x[k]), w[i] * w[j] * w[k]});
+  rule.reserve(static_cast<std::size_t>(nx * ny * nz));
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) rule.push_back({Eigen::Vector3d(x[i], y[j], z[k]), wx[i] * wy[j] * wz[k]});
   return rule;
 }
 

@@ -18,6 +18,8 @@ void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w);
 
 // Tensor Gauss-Legendre rule with n points per direction on [-1, 1]^3 (n = 1..8).
 std::vector<QuadraturePoint> hex_gauss_rule(int n);
+// Anisotropic tensor rule: nx, ny, nz points along the three reference directions.
+std::vector<QuadraturePoint> hex_gauss_rule(int nx, int ny, int nz);
 // Rule on the unit tetrahedron exact for polynomials of total degree `degree`.
 // Degree <= 2 uses the classic 4-point rule; higher degrees a collapsed (Duffy) Gauss product.
 std::vector<QuadraturePoint> tet_rule(int degree);

@@ -1,0 +1,83 @@
+// Issue 3 check 5: bad G-code is rejected with its line; good G-code round-trips.
+#include "levelset/gcode.hpp"
+#include "support/input_error.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace drom::levelset;
+
+namespace {
+std::string error_of(const std::string& program) {
+  try {
+    parse_gcode(program, "prog.nc");
+  } catch (const drom::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(GCode, ParsesTheSupportedSubset) {
+  const auto path = parse_gcode(
+      "%\n(pocket)\nN10 G21 G90 G17\nN20 G0 X0 Y0 Z5\nN30 G43 H3 G1 Z-1 F600 ; plunge\nN40 X10\nN50 G2 X20 Y0 I5 J0\n"
+      "N60 G91 G1 Y5\nN70 G90 G3 X10 Y5 R5\nN80 G20 G1 X1\nN90 G49 G0 Z0.5\nM30\n",
+      "prog.nc");
+  ASSERT_EQ(path.moves.size(), 8u);
+  EXPECT_EQ(path.moves[1].kind, MoveKind::Linear);
+  EXPECT_NEAR(path.moves[1].feed, 10.0, 1e-12);  // F600 mm/min
+  EXPECT_EQ(path.moves[1].tool_length_offset, 3);
+  EXPECT_EQ(path.moves[3].kind, MoveKind::ArcCW);
+  EXPECT_NEAR(path.moves[3].length(), M_PI * 5, 1e-9);
+  EXPECT_NEAR(path.moves[4].end.y(), 5, 1e-12);  // incremental
+  EXPECT_EQ(path.moves[5].kind, MoveKind::ArcCCW);
+  EXPECT_NEAR(path.moves[6].end.x(), 25.4, 1e-12);  // inches
+  EXPECT_NEAR(path.moves[7].end.z(), 0.5 * 25.4, 1e-12);
+  EXPECT_EQ(path.moves[7].tool_length_offset, 0);
+  EXPECT_EQ(path.moves[2].source_line, 6);
+}
+
+TEST(GCode, RejectsBadProgramsNamingTheLine) {
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG1 X5 Q3 F100\n").find("prog.nc:2: unsupported word 'Q'"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG1 X5\n").find("prog.nc:2: cutting move (G1) without a feed rate"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG2 X10 Y0 I4 J0 F100\n").find("prog.nc:2: arc radius is inconsistent: 4.0000 mm at the start, 6.0000 mm at the end"),
+            std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG18 G2 X10 Z0 I5 K0 F100\n").find("prog.nc:2: only G17"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG2 X10 Y0 R2 F100\n").find("prog.nc:2: arc radius R"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0\nG81 X1\n").find("prog.nc:2: unsupported word G81"), std::string::npos);
+  EXPECT_NE(error_of("X1 Y2\n").find("prog.nc:1: axis words before any motion mode"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 (unclosed\n").find("prog.nc:1: unclosed comment"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 X1\n").find("prog.nc:1: word X appears twice"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0\nM98\n").find("prog.nc:2: unsupported word M98"), std::string::npos);
+}
+
+TEST(GCode, WriteThenReadReproducesMoves) {
+  Toolpath path;
+  Move a;
+  a.kind = MoveKind::Rapid;
+  a.start = {0, 0, 5};
+  a.end = {1, 2, 5};
+  Move b;
+  b.kind = MoveKind::Linear;
+  b.start = a.end;
+  b.end = {1, 2, -1};
+  b.feed = 2;
+  Move c;
+  c.kind = MoveKind::ArcCCW;
+  c.start = b.end;
+  c.end = {11, 2, -1};
+  c.centre = {6, 2, -1};
+  c.feed = 10;
+  c.tool_length_offset = 2;
+  path.moves = {a, b, c};
+  const auto back = parse_gcode(write_gcode(path, "test"), "roundtrip.nc");
+  ASSERT_EQ(back.moves.size(), 4u);  // the first position is stated with a G0
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(back.moves[k + 1].kind, path.moves[k].kind);
+    EXPECT_LT((back.moves[k + 1].end - path.moves[k].end).norm(), 1e-4);
+    EXPECT_NEAR(back.moves[k + 1].feed, path.moves[k].feed, 1e-9);
+    EXPECT_EQ(back.moves[k + 1].tool_length_offset, path.moves[k].tool_length_offset);
+  }
+  EXPECT_NEAR(back.moves[3].length(), M_PI * 5, 1e-6);
+}
