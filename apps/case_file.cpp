@@ -84,6 +84,41 @@ void read_pocket(CaseReader& r, Case& c) {
   }
 }
 
+void read_tool(CaseReader& r, Case& c) {
+  c.tool_kind = r.choice("tool.kind", {"flat", "ball", "bull_nose"});
+  c.tool_radius = r.real("tool.radius", Range::positive());
+  if (c.tool_kind == "bull_nose") {
+    c.tool_corner_radius = r.real("tool.corner_radius", Range::positive());
+    if (c.tool_corner_radius >= c.tool_radius) r.fail("tool.corner_radius", "must be smaller than tool.radius (equal is a ball end mill)");
+  } else {
+    c.tool_corner_radius = c.tool_kind == "ball" ? c.tool_radius : 0.0;
+  }
+  c.tool_flute_length = r.real("tool.flute_length", Range::positive(), 3 * c.tool_radius);
+  if (c.tool_flute_length <= c.pocket_depth) r.fail("tool.flute_length", "must exceed pocket.depth");
+}
+
+void read_path(CaseReader& r, Case& c) {
+  c.path_strategy = r.choice("path.strategy", {"one_way", "zigzag", "spiral"}, "one_way");
+  if (r.has("path.gcode")) {
+    c.gcode = relative_to(r.origin(), r.text("path.gcode"));
+    for (const char* generated : {"path.stepover", "path.scallop_height", "path.strategy", "path.finish_walls"})
+      if (r.has(generated)) r.fail(generated, "describes a generated toolpath, but path.gcode gives the program: remove one of them");
+  }
+  if (r.has("path.scallop_height")) {
+    if (r.has("path.stepover")) r.fail("path.scallop_height", "give either path.stepover or path.scallop_height, not both");
+    if (c.tool_kind == "flat") r.fail("path.scallop_height", "a flat end mill leaves no scallop on a flat floor: set path.stepover");
+    c.scallop_height = r.real("path.scallop_height", Range::open_closed(0, c.tool_corner_radius));
+  } else if (c.gcode.empty()) {
+    c.stepover = r.real("path.stepover", Range::open_closed(0, 2 * c.tool_radius));
+  }
+  c.feed = r.real("path.feed", Range::positive(), 10.0);
+  c.plunge_feed = r.real("path.plunge_feed", Range::positive(), c.feed / 5);
+  c.clearance = r.real("path.clearance", Range::positive(), 5.0);
+  c.finish_walls = r.boolean("path.finish_walls", true);
+  c.stations = r.choice("path.stations", {"spacing", "waypoints"}, "spacing");
+  if (c.stations == "spacing") c.station_spacing = r.real("path.station_spacing", Range::positive());
+}
+
 void read_clamps(CaseReader& r, Case& c) {
   const std::size_t n = r.table_count("clamps");
   if (n == 0) r.fail("clamps", "missing; expected at least one [[clamps]] table holding the part");
@@ -129,7 +164,11 @@ Case load_case(const std::optional<std::filesystem::path>& path, const std::vect
   read_mesh(r, c);
   read_stress(r, c);
   read_pocket(r, c);
+  read_tool(r, c);
+  read_path(r, c);
   c.removal_criterion = r.choice("removal.criterion", {"centroid", "volume_fraction"}, "volume_fraction");
+  c.voxel_size = r.real("removal.voxel_size", Range::positive(), 0.0);
+  c.frames = static_cast<int>(r.integer("removal.frames", 0, 10000, 20));
   read_clamps(r, c);
   r.finish();
   c.resolved_toml = r.resolved_text();

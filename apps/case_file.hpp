@@ -43,8 +43,24 @@ struct Case {
   // [pocket]
   double pocket_x = 0, pocket_y = 0, pocket_length_x = 0, pocket_length_y = 0, pocket_depth = 0;
 
+  // [tool]
+  std::string tool_kind;  // flat, ball, bull_nose
+  double tool_radius = 0, tool_corner_radius = 0, tool_flute_length = 0;
+
+  // [path]
+  std::string path_strategy;  // one_way, zigzag, spiral
+  double stepover = 0;        // mm (given, or from scallop_height)
+  double scallop_height = 0;  // mm, 0 when the stepover is given
+  double feed = 0, plunge_feed = 0, clearance = 0;
+  bool finish_walls = true;
+  std::filesystem::path gcode;  // optional program to read instead of generating one
+  std::string stations;         // spacing, waypoints
+  double station_spacing = 0;   // mm of cutting travel
+
   // [removal]
   std::string removal_criterion;  // centroid, volume_fraction
+  double voxel_size = 0;          // mm; 0 = chosen from the tool and the mesh
+  int frames = 0;                 // VTK frames of the remaining part written by drom removal
 
   std::vector<ClampSpec> clamps;
 };

@@ -1,12 +1,15 @@
 #include "apps/case_setup.hpp"
 
 #include "fem/node_sets.hpp"
+#include "levelset/gcode.hpp"
+#include "levelset/pocket_toolpath.hpp"
 #include "fem/structured_mesh.hpp"
 #include "fem/tet_mesh.hpp"
 #include "support/input_error.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace drom::app {
 
@@ -76,6 +79,51 @@ std::vector<int> clamp_dofs(const Case& c, const PartModel& part) {
   std::sort(dofs.begin(), dofs.end());
   dofs.erase(std::unique(dofs.begin(), dofs.end()), dofs.end());
   return dofs;
+}
+
+}  // namespace drom::app
+
+namespace drom::app {
+
+levelset::Tool build_tool(const Case& c) {
+  if (c.tool_kind == "ball") return levelset::Tool::ball(c.tool_radius, c.tool_flute_length);
+  if (c.tool_kind == "bull_nose") return levelset::Tool::bull_nose(c.tool_radius, c.tool_corner_radius, c.tool_flute_length);
+  return levelset::Tool::flat(c.tool_radius, c.tool_flute_length);
+}
+
+levelset::Toolpath build_toolpath(const Case& c, const PartModel& part) {
+  if (!c.gcode.empty()) return levelset::read_gcode(c.gcode.string());
+  const levelset::Tool tool = build_tool(c);
+  levelset::PocketPathSpec spec;
+  spec.strategy = c.path_strategy == "zigzag" ? levelset::PocketStrategy::Zigzag
+                  : c.path_strategy == "spiral" ? levelset::PocketStrategy::Spiral
+                                                : levelset::PocketStrategy::OneWay;
+  spec.stepover = c.scallop_height > 0 ? levelset::stepover_for_scallop(tool, c.scallop_height) : c.stepover;
+  spec.feed = c.feed;
+  spec.plunge_feed = c.plunge_feed;
+  spec.clearance = c.clearance;
+  spec.finish_walls = c.finish_walls;
+  try {
+    return levelset::pocket_toolpath(part.shape, {c.pocket_x, c.pocket_y, c.pocket_length_x, c.pocket_length_y, c.pocket_depth}, tool, spec);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(c.origin + ": [pocket]/[tool]/[path]: " + e.what());
+  }
+}
+
+levelset::Workpiece build_workpiece(const Case& c, const PartModel& part, double voxel_size) {
+  if (c.shape == "stl") return levelset::Workpiece::from_surface(levelset::read_closed_stl(c.stl), voxel_size);
+  return levelset::Workpiece::from_shape(part.shape);
+}
+
+double voxel_size_for(const Case& c, const PartModel& part) {
+  if (c.voxel_size > 0) return c.voxel_size;
+  double thinnest = part.shape.thickness();
+  for (int e = 0; e < part.mesh.element_count(); ++e) {
+    const Eigen::Matrix3Xd X = part.mesh.element_nodes(e);
+    const Eigen::Vector3d extent = X.rowwise().maxCoeff() - X.rowwise().minCoeff();
+    thinnest = std::min(thinnest, extent.minCoeff());
+  }
+  return levelset::default_voxel_size(build_tool(c), c.pocket_depth, thinnest);
 }
 
 }  // namespace drom::app

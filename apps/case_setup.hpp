@@ -3,7 +3,10 @@
 #include "apps/case_file.hpp"
 #include "fem/element_operators.hpp"
 #include "fem/mesh.hpp"
+#include "levelset/material_removal.hpp"
 #include "levelset/part_shape.hpp"
+#include "levelset/tool.hpp"
+#include "levelset/toolpath.hpp"
 #include "fem/residual_stress.hpp"
 
 #include <vector>
@@ -22,5 +25,12 @@ PartModel build_part(const Case& c);
 // Dofs fixed by the case's [[clamps]]; throws InputError for a clamp that selects nothing.
 std::vector<int> clamp_dofs(const Case& c, const PartModel& part);
 fem::ProfileParity parity_of(const Case& c);
+
+levelset::Tool build_tool(const Case& c);
+// The case's G-code program if it names one, otherwise the generated pocket toolpath.
+levelset::Toolpath build_toolpath(const Case& c, const PartModel& part);
+levelset::Workpiece build_workpiece(const Case& c, const PartModel& part, double voxel_size);
+// The case's voxel size, or one chosen from the tool, the depth of cut and the thinnest element.
+double voxel_size_for(const Case& c, const PartModel& part);
 
 }  // namespace drom::app

@@ -17,5 +17,6 @@ struct CommandOptions {
 int run_command(const CommandOptions& options);    // drom run
 int mesh_command(const CommandOptions& options);   // drom mesh
 int check_command(const CommandOptions& options);  // drom check
+int removal_command(const CommandOptions& options);  // drom removal
 
 }  // namespace drom::app

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   };
   const Sub subs[] = {
       {"run", "run the main job on a case (default: the embedded flat-plate case)", drom::app::run_command},
+      {"removal", "compute the material each tool station removes, on the case's mesh", drom::app::removal_command},
       {"mesh", "mesh the case's part and write it with its clamps to VTK", drom::app::mesh_command},
       {"check", "validate a case file and print it with every override applied", drom::app::check_command},
   };

@@ -33,6 +33,7 @@ levelset::ElementSamples element_samples(const Mesh& mesh, double spacing) {
   samples.bounds.resize(n);
   samples.points.resize(n);
   samples.weights.resize(n);
+  samples.cell.assign(n, Eigen::Matrix3d::Zero());
   Eigen::VectorXd N;
   Eigen::MatrixX3d dN;
   for (int e = 0; e < mesh.element_count(); ++e) {
@@ -45,8 +46,12 @@ levelset::ElementSamples element_samples(const Mesh& mesh, double spacing) {
       // Extent along each reference direction from the Jacobian at the centre.
       shape_functions(mesh.type, Eigen::Vector3d::Zero(), N, dN);
       const Eigen::Matrix3d J = X * dN;
-      rule = midpoint_grid(points_for(2 * J.col(0).norm(), spacing, 1), points_for(2 * J.col(1).norm(), spacing, 1),
-                           points_for(2 * J.col(2).norm(), spacing, 1));
+      const int nx = points_for(2 * J.col(0).norm(), spacing, 1), ny = points_for(2 * J.col(1).norm(), spacing, 1),
+                nz = points_for(2 * J.col(2).norm(), spacing, 1);
+      rule = midpoint_grid(nx, ny, nz);
+      samples.cell[k].col(0) = 2.0 / nx * J.col(0);
+      samples.cell[k].col(1) = 2.0 / ny * J.col(1);
+      samples.cell[k].col(2) = 2.0 / nz * J.col(2);
     } else {
       double longest = 0;
       for (int a = 0; a < 4; ++a)

@@ -171,10 +171,31 @@ void MaterialRemoval::update_remaining(const ElementSamples& elements, RemovalCr
     const auto& w = elements.weights[e];
     double volume = 0, gone = 0;
     for (double wi : w) volume += wi;
-    // Each sample stands for a cell of the element's volume / sample count. Beyond the narrow band
-    // the level set only says "inside" or "outside", so the ramp may not be wider than the band.
-    const double width = std::clamp(std::cbrt(volume / static_cast<double>(pts.size())), voxel_, 2 * band_);
-    for (std::size_t q = 0; q < pts.size(); ++q) gone += w[q] * inside_fraction(phi(pts[q]), width);
+    const bool has_cell = e < elements.cell.size() && elements.cell[e].squaredNorm() > 0;
+    // Without a cell shape, each sample stands for a cube of the element's volume / sample count.
+    const double cube = std::cbrt(volume / static_cast<double>(pts.size()));
+    for (std::size_t q = 0; q < pts.size(); ++q) {
+      const double value = phi(pts[q]);
+      if (!has_cell || std::abs(value) >= band_) {
+        // Far from the cut (or no cell shape): beyond the band the level set only says inside or
+        // outside, so the ramp may not be wider than the band.
+        gone += w[q] * inside_fraction(value, std::clamp(cube, voxel_, 2 * band_));
+        continue;
+      }
+      // Near the cut: integrate the cell at the level set's own resolution, a one-voxel ramp per
+      // sub-sample (exact for a planar cut; thin removed layers inside one cell stay right too).
+      const Eigen::Matrix3d& c = elements.cell[e];
+      int m[3];
+      for (int d = 0; d < 3; ++d) m[d] = std::clamp(static_cast<int>(std::ceil(c.col(d).norm() / voxel_)), 1, 12);
+      double share = 0;
+      for (int i = 0; i < m[0]; ++i)
+        for (int j = 0; j < m[1]; ++j)
+          for (int k = 0; k < m[2]; ++k) {
+            const Eigen::Vector3d offset((i + 0.5) / m[0] - 0.5, (j + 0.5) / m[1] - 0.5, (k + 0.5) / m[2] - 0.5);
+            share += inside_fraction(phi(pts[q] + c * offset), voxel_);
+          }
+      gone += w[q] * share / (m[0] * m[1] * m[2]);
+    }
     remaining[e] = std::clamp(1.0 - gone / volume, 0.0, 1.0);
   }
 }
@@ -186,7 +207,7 @@ void MaterialRemoval::write_surface(const std::filesystem::path& path) const {
   std::vector<openvdb::Vec3s> points;
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
-  if (grid_->grid->tree().activeVoxelCount() > 0) openvdb::tools::volumeToMesh(*grid_->grid, points, triangles, quads, 0.0);
+  if (grid_->grid->tree().activeVoxelCount() > 0) openvdb::tools::volumeToMesh(*grid_->grid, points, triangles, quads, 0.0, 0.3);  // adaptive: flat faces get few polygons
   vtkNew<vtkPoints> vtk_points;
   for (const auto& p : points) vtk_points->InsertNextPoint(p.x(), p.y(), p.z());
   vtkNew<vtkCellArray> polys;

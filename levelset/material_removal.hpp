@@ -40,6 +40,9 @@ struct ElementSamples {
   std::vector<Eigen::AlignedBox3d> bounds;
   std::vector<std::vector<Eigen::Vector3d>> points;
   std::vector<std::vector<double>> weights;
+  // Edge vectors (columns) of the cell each sample stands for, when the samples form a regular
+  // grid; zero otherwise. Cells the cut passes through are integrated at voxel resolution.
+  std::vector<Eigen::Matrix3d> cell;
   std::size_t size() const { return centroid.size(); }
 };
 

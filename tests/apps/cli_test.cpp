@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -56,6 +57,8 @@ std::filesystem::path stl_case(const std::filesystem::path& stl) {
                       << "'\n[material]\nyoung_modulus = 71700.0\npoisson_ratio = 0.33\n[mesh]\ntet_max_volume = 20.0\n"
                          "[stress]\nparity = 'even'\nmax_degree = 4\nsigma11 = [-50.0, 20.0]\nsigma22 = [-50.0, 20.0]\n"
                          "[pocket]\nx_min = 5.0\ny_min = 5.0\nlength_x = 30.0\nlength_y = 20.0\ndepth = 1.5\n"
+                         "[tool]\nkind = 'flat'\nradius = 3.0\n[path]\nstepover = 4.0\nstation_spacing = 10.0\n"
+                         "[removal]\nvoxel_size = 0.2\nframes = 3\n"
                          "[[clamps]]\nface = 'bottom'\n";
   return path;
 }
@@ -111,4 +114,36 @@ TEST(Cli, RunWritesVtkAndSummaryOnACoarsePlate) {
   EXPECT_LT(s["intact_clamped_max_displacement_mm"].get<double>(), 1e-9);
   EXPECT_LT(s["free_plate_curvature_per_mm"]["relative_error"].get<double>(), 0.01);
   EXPECT_GT(s["thinned_clamped_max_vertical_displacement_mm"].get<double>(), 0.1);
+}
+
+TEST(Cli, RemovalOnAnStlPartWritesItsOutputs) {
+  const auto out = temp_dir() / "removal_out";
+  std::filesystem::remove_all(out);
+  const auto r = drom("removal " + stl_case(box_stl("removal_box.stl", false)).string() + " --quiet --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"removal.h5", "volumes.csv", "removal.pvd", "removed_surface.vtp", "toolpath.nc", "summary.json"})
+    EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
+  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  // Pocket 30 x 20 x 1.5 with a 3 mm flat end mill: the 4 corners keep (1 - pi/4) r^2 each.
+  const double exact = 30.0 * 20 * 1.5 - 4 * (1 - M_PI / 4) * 9 * 1.5;
+  EXPECT_NEAR(s["removed_volume_mm3"].get<double>() / exact, 1.0, 0.01);
+  EXPECT_NEAR(s["mesh_removed_volume_mm3"].get<double>() / exact, 1.0, 0.05);  // tets, not aligned with the floor
+  EXPECT_GT(s["stations"].get<int>(), 10);
+  // The G-code it wrote drives the same removal when a case names it instead of generating a path.
+  std::string text;
+  {
+    std::ifstream in(stl_case(box_stl("removal_box.stl", false)));
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const auto conflict = drom("check " + stl_case(box_stl("removal_box.stl", false)).string() + " --set path.gcode='x.nc'");
+  EXPECT_EQ(conflict.exit_code, 2);
+  EXPECT_NE(conflict.output.find("path.stepover: describes a generated toolpath"), std::string::npos) << conflict.output;
+  text.replace(text.find("stepover = 4.0"), 14, "gcode = '" + (out / "toolpath.nc").string() + "'");
+  const auto gcode_case = temp_dir() / "removal_gcode.toml";
+  std::ofstream(gcode_case) << text;
+  const auto out2 = temp_dir() / "removal_gcode_out";
+  const auto again = drom("removal " + gcode_case.string() + " --quiet --out " + out2.string());
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  const auto s2 = nlohmann::json::parse(std::ifstream(out2 / "summary.json"));
+  EXPECT_NEAR(s2["removed_volume_mm3"].get<double>(), s["removed_volume_mm3"].get<double>(), 1e-3 * exact);
 }

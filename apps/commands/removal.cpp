@@ -1,0 +1,132 @@
+// drom removal: the material each tool station takes away, on the case's mesh (issue 3).
+#include "apps/case_setup.hpp"
+#include "apps/commands.hpp"
+#include "apps/summary.hpp"
+#include "fem/element_samples.hpp"
+#include "fem/vtk_output.hpp"
+#include "levelset/gcode.hpp"
+#include "support/atomic_file.hpp"
+#include "support/hdf5_writer.hpp"
+#include "support/input_error.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+#include <unistd.h>
+
+namespace drom::app {
+
+int removal_command(const CommandOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  const Case c = load_case(options.case_path, options.overrides);
+  const PartModel part = build_part(c);
+  const auto& mesh = part.mesh;
+  const levelset::Tool tool = build_tool(c);
+  const levelset::Toolpath path = build_toolpath(c, part);
+  const levelset::PathTimeline timeline(path);
+  const auto stations = c.stations == "waypoints" ? levelset::stations_at_waypoints(path, timeline)
+                                                  : levelset::stations_by_spacing(path, timeline, c.station_spacing);
+  if (stations.empty()) throw InputError(c.origin + ": the toolpath has no cutting move, so there is no station");
+  const double voxel = voxel_size_for(c, part);
+  levelset::MaterialRemoval removal(build_workpiece(c, part, voxel), tool, voxel);
+  const auto samples = fem::element_samples(mesh, 2 * 3 * voxel);  // sample cells as wide as the narrow band
+  const auto volumes = fem::element_volumes(mesh);
+  const auto criterion = c.removal_criterion == "centroid" ? levelset::RemovalCriterion::Centroid : levelset::RemovalCriterion::VolumeFraction;
+  if (!options.quiet)
+    std::cerr << c.name << ": " << path.moves.size() << " moves, " << stations.size() << " stations, " << mesh.element_count() << " elements, voxel "
+              << voxel << " mm\n";
+
+  const std::size_t ns = stations.size(), ne = static_cast<std::size_t>(mesh.element_count());
+  std::vector<float> activity;
+  activity.reserve(ns * ne);
+  std::vector<double> removed(ns), mesh_removed(ns), time(ns), length(ns), position(3 * ns);
+  std::vector<double> remaining(ne, 1.0);
+  const int frames = std::max(1, std::min<int>(c.frames, static_cast<int>(ns)));
+  fem::PvdCollection pvd;
+  std::ostringstream csv;
+  csv << "station,time_s,path_length_mm,x,y,z,removed_mm3,station_removed_mm3,mesh_removed_mm3\n";
+  double previous_length = 0;
+  const bool interactive = isatty(2) != 0;
+  for (std::size_t k = 0; k < ns; ++k) {
+    const double added = removal.sweep(levelset::cutting_polylines(path, timeline, previous_length, stations[k].path_length, 0.01));
+    previous_length = stations[k].path_length;
+    removal.update_remaining(samples, criterion, remaining, true);
+    double gone = 0;
+    for (std::size_t e = 0; e < ne; ++e) {
+      activity.push_back(static_cast<float>(remaining[e]));
+      gone += (1 - remaining[e]) * volumes[e];
+    }
+    removed[k] = removal.removed_volume();
+    mesh_removed[k] = gone;
+    time[k] = stations[k].time;
+    length[k] = stations[k].path_length;
+    for (int d = 0; d < 3; ++d) position[3 * k + static_cast<std::size_t>(d)] = stations[k].position[d];
+    char row[256];
+    std::snprintf(row, sizeof row, "%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", k, time[k], length[k], stations[k].position.x(),
+                  stations[k].position.y(), stations[k].position.z(), removed[k], added, gone);
+    csv << row;
+    // Frames spread evenly over the stations, the last one always.
+    if ((k + 1) * static_cast<std::size_t>(frames) / ns != k * static_cast<std::size_t>(frames) / ns || k + 1 == ns) {
+      std::vector<char> keep(ne);
+      for (std::size_t e = 0; e < ne; ++e) keep[e] = remaining[e] > 0;
+      fem::VtuFields fields;
+      fields.cell_scalars = {{"remaining_fraction", remaining}};
+      char name[64];
+      std::snprintf(name, sizeof name, "removal_%05zu.vtu", k);
+      fem::write_vtu(options.out / "frames" / name, mesh, fields, keep);
+      pvd.add(time[k], std::filesystem::path("frames") / name);
+    }
+    if (!options.quiet && (k % std::max<std::size_t>(1, ns / 20) == 0 || k + 1 == ns)) {
+      const double rate = static_cast<double>(k + 1) / elapsed();
+      // One line rewritten in place on a terminal, one line per update in a log.
+      std::fprintf(stderr, "%s  station %zu/%zu  %.1f stations/s  %.0f s left%s", interactive ? "\r" : "", k + 1, ns, rate,
+                   static_cast<double>(ns - k - 1) / rate, interactive ? "   " : "\n");
+    }
+  }
+  if (!options.quiet && interactive) std::cerr << "\n";
+
+  pvd.write(options.out / "removal.pvd");
+  write_file_atomically(options.out / "volumes.csv", csv.str());
+  write_file_atomically(options.out / "toolpath.nc", levelset::write_gcode(path, c.name + " toolpath"));
+  removal.write_surface(options.out / "removed_surface.vtp");
+  {
+    Hdf5Writer h5(options.out / "removal.h5");
+    h5.write("activity", activity, ns, ne);
+    h5.write("station_time", time, ns, 1);
+    h5.write("station_path_length", length, ns, 1);
+    h5.write("station_position", position, ns, 3);
+    h5.write("removed_volume", removed, ns, 1);
+    h5.write("mesh_removed_volume", mesh_removed, ns, 1);
+    h5.write("element_volume", volumes, ne, 1);
+    h5.attribute("case", c.resolved_toml);
+    h5.attribute("criterion", c.removal_criterion);
+    h5.attribute("voxel_size_mm", voxel);
+    h5.commit();
+  }
+  const double measured = removal.measured_volume();
+  write_summary(options.out, {{"command", "removal"},
+                              {"case", c.name},
+                              {"stations", ns},
+                              {"moves", path.moves.size()},
+                              {"path_duration_s", timeline.duration()},
+                              {"elements", ne},
+                              {"criterion", c.removal_criterion},
+                              {"voxel_size_mm", voxel},
+                              {"removed_volume_mm3", removal.removed_volume()},
+                              {"removed_volume_openvdb_measure_mm3", measured},
+                              {"mesh_removed_volume_mm3", mesh_removed.back()},
+                              {"active_voxels", removal.active_voxels()},
+                              {"level_set_memory_mb", static_cast<double>(removal.memory_bytes()) / 1048576.0},
+                              {"time_s", elapsed()},
+                              {"time_per_station_ms", 1000 * elapsed() / static_cast<double>(ns)},
+                              {"machine", machine_info()},
+                              {"files", {"removal.h5", "volumes.csv", "removal.pvd", "removed_surface.vtp", "toolpath.nc"}}});
+  if (!options.quiet)
+    std::printf("drom removal: %s: %zu stations, removed %.1f mm^3 (level set; OpenVDB measure %.1f), %.1f mm^3 on the mesh; %.1f s -> %s\n",
+                c.name.c_str(), ns, removal.removed_volume(), measured, mesh_removed.back(), elapsed(), options.out.string().c_str());
+  return 0;
+}
+
+}  // namespace drom::app
