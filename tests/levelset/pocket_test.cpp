@@ -173,3 +173,24 @@ TEST(Removal, CurvedPanelPocketRemovesItsExactVolume) {
               unreachable, 100 * unreachable / sector, 100 * (v / exact - 1));
   EXPECT_NEAR(v / exact, 1.0, 0.005);
 }
+
+TEST(Removal, SpiralAndZigzagPocketsClearThePocket) {
+  const PartShape plate = PartShape::plate(160, 120, 10);
+  const Tool tool = Tool::flat(6, 20);
+  const PocketSpec pocket{30, 20, 100, 80, 1.5};
+  const double exact = 100.0 * 80 * 1.5 - 4 * (1 - M_PI / 4) * 36 * 1.5;  // the corners keep the tool's radius
+  for (auto strategy : {PocketStrategy::Spiral, PocketStrategy::Zigzag}) {
+    MaterialRemoval removal(Workpiece::from_shape(plate), tool, 0.25);
+    const Toolpath path = pocket_toolpath(plate, pocket, tool, {strategy, 10, 10, 2, 5, 0.01});
+    const double v = removed_volume(removal, path);
+    // The spiral's rings are its own wall contour; zigzag gets the finishing contour.
+    EXPECT_NEAR(v / exact, 1.0, 0.005) << (strategy == PocketStrategy::Spiral ? "spiral" : "zigzag");
+    // Every move stays inside the pocket (tool centre at least R from the walls).
+    for (const auto& m : path.moves) {
+      EXPECT_GE(m.end.x(), 30 + 6 - 1e-9);
+      EXPECT_LE(m.end.x(), 130 - 6 + 1e-9);
+      EXPECT_GE(m.end.y(), 20 + 6 - 1e-9);
+      EXPECT_LE(m.end.y(), 100 - 6 + 1e-9);
+    }
+  }
+}
