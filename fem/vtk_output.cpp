@@ -1,6 +1,7 @@
 #include "fem/vtk_output.hpp"
 
 #include "support/atomic_file.hpp"
+#include "support/vtk_xml.hpp"
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
@@ -73,14 +74,9 @@ void write_vtu(const std::filesystem::path& path, const Mesh& mesh, const VtuFie
     grid->GetCellData()->AddArray(a);
   }
 
-  AtomicFile file(path);
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
-  writer->SetFileName(file.temporary_path().c_str());
   writer->SetInputData(grid);
-  writer->SetDataModeToAppended();
-  writer->SetCompressorTypeToZLib();
-  if (writer->Write() != 1) throw std::runtime_error("cannot write " + path.string());
-  file.commit();
+  write_vtk_xml(*writer, path);
 }
 
 void PvdCollection::write(const std::filesystem::path& path) const {

@@ -1,7 +1,7 @@
 // OpenVDB lives in this translation unit only (it is slow to compile and heavy to include).
 #include "levelset/material_removal.hpp"
 
-#include "support/atomic_file.hpp"
+#include "support/vtk_xml.hpp"
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
@@ -222,14 +222,9 @@ void MaterialRemoval::write_surface(const std::filesystem::path& path) const {
   vtkNew<vtkPolyData> poly;
   poly->SetPoints(vtk_points);
   poly->SetPolys(polys);
-  AtomicFile file(path);
   vtkNew<vtkXMLPolyDataWriter> writer;
-  writer->SetFileName(file.temporary_path().c_str());
   writer->SetInputData(poly);
-  writer->SetDataModeToAppended();
-  writer->SetCompressorTypeToZLib();
-  if (writer->Write() != 1) throw std::runtime_error("cannot write " + path.string());
-  file.commit();
+  write_vtk_xml(*writer, path);
 }
 
 double default_voxel_size(const Tool& tool, double depth_of_cut, double smallest_element) {
