@@ -12,11 +12,17 @@ struct CommandOptions {
   std::vector<std::string> overrides;              // "key=value"
   std::filesystem::path out = "out";
   bool quiet = false;
+  // drom offline / truth
+  bool resume = false;   // continue an interrupted run in --out
+  int stop_after = -1;   // solve at most this many stations in this invocation, then stop (batch, tests)
+  int threads = 0;       // 0: one per hardware thread
 };
 
 int run_command(const CommandOptions& options);    // drom run
 int mesh_command(const CommandOptions& options);   // drom mesh
 int check_command(const CommandOptions& options);  // drom check
 int removal_command(const CommandOptions& options);  // drom removal
+int offline_command(const CommandOptions& options);  // drom offline
+int truth_command(const CommandOptions& options);    // drom truth
 
 }  // namespace drom::app

@@ -21,6 +21,8 @@ int main(int argc, char** argv) {
   const Sub subs[] = {
       {"run", "run the main job on a case (default: the embedded flat-plate case)", drom::app::run_command},
       {"removal", "compute the material each tool station removes, on the case's mesh", drom::app::removal_command},
+      {"offline", "simulate the machining once per unit stress profile: the snapshot database (B1, B2)", drom::app::offline_command},
+      {"truth", "simulate the machining for the case's own stress profile, with full fields", drom::app::truth_command},
       {"mesh", "mesh the case's part and write it with its clamps to VTK", drom::app::mesh_command},
       {"check", "validate a case file and print it with every override applied", drom::app::check_command},
   };
@@ -31,6 +33,11 @@ int main(int argc, char** argv) {
     cmd->add_option("--set", options.overrides, "override a case value, e.g. --set mesh.nx=20 (repeatable)")->take_all();
     cmd->add_option("--out", options.out, "output folder")->capture_default_str();
     cmd->add_flag("--quiet", options.quiet, "no progress or table, only files");
+    if (std::string(sub.name) == "offline" || std::string(sub.name) == "truth") {
+      cmd->add_flag("--resume", options.resume, "continue the interrupted run in --out (refuses a different case)");
+      cmd->add_option("--stop-after", options.stop_after, "solve at most N stations in this invocation, then stop (resume later)")->check(CLI::NonNegativeNumber);
+      cmd->add_option("--threads", options.threads, "worker threads (default: one per hardware thread)")->check(CLI::PositiveNumber);
+    }
     commands.emplace_back(cmd, &sub);
   }
 

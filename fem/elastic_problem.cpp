@@ -68,10 +68,20 @@ void ElasticProblem::equilibrate(const std::vector<int>& isostatic_dofs) {
   for (int d : isostatic_dofs) rhs.row(d).setZero();
   solver_.factorize(Kheld);
   u0_ = solver_.solve(rhs);
+
   // The profile is self-equilibrated, so the 3-2-1 reactions vanish and r0 is solver noise; it is
   // kept and subtracted so the load below equals -sum_e a_e int B^T sigma0 literally.
   r0_ = fR + K.selfadjointView<Eigen::Lower>() * u0_;
   relative_residual_ = r0_.cwiseAbs().maxCoeff() / std::max(1e-300, fR.cwiseAbs().maxCoeff());
+  equilibrated_ = true;
+}
+
+void ElasticProblem::adopt_equilibrium(const ElasticProblem& other) {
+  if (&other.mesh_ != &mesh_ || other.profiles_.size() != profiles_.size() || !other.equilibrated_)
+    throw std::invalid_argument("adopt_equilibrium: the other problem must be equilibrated on the same mesh and profiles");
+  u0_ = other.u0_;
+  r0_ = other.r0_;
+  relative_residual_ = other.relative_residual_;
   equilibrated_ = true;
 }
 

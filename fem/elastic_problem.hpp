@@ -32,6 +32,9 @@ class ElasticProblem {
 
   // Step 1: equilibrate each profile on the intact free stock (held 3-2-1 at `isostatic_dofs`).
   void equilibrate(const std::vector<int>& isostatic_dofs);
+  // Or take the equilibrium another problem on the same mesh, part and profiles computed (so parallel
+  // workers share one equilibration).
+  void adopt_equilibrium(const ElasticProblem& other);
   // Step 2: which material is left (per element, in [0, 1]) and which dofs are fixed.
   void set_activity(std::vector<double> volume_fraction);
   void set_fixed_dofs(std::vector<int> dofs);

@@ -50,8 +50,7 @@ void ElementOperators::strain_matrix(const Eigen::MatrixX3d& dNdx, Eigen::Matrix
   }
 }
 
-Eigen::MatrixXd ElementOperators::compute_stiffness(int e) const {
-  const Eigen::Matrix3Xd X = mesh_.element_nodes(e);
+Eigen::MatrixXd ElementOperators::compute_stiffness(const Eigen::Matrix3Xd& X) const {
   const auto ndof = 3 * X.cols();
   Eigen::MatrixXd K = Eigen::MatrixXd::Zero(ndof, ndof), B, CB;
   Eigen::VectorXd N;
@@ -69,24 +68,27 @@ Eigen::MatrixXd ElementOperators::compute_stiffness(int e) const {
 }
 
 const Eigen::MatrixXd& ElementOperators::stiffness(int e) {
-  // Key: node coordinates relative to the first node, rounded far below any physical length.
+  // Key: node coordinates relative to the first node, rounded far below any physical length. The
+  // matrix is computed from the rounded coordinates themselves, so every member of a shape class
+  // gets the same bits whichever is met first: results do not depend on the order of work.
   const Eigen::Matrix3Xd X = mesh_.element_nodes(e);
-  const Eigen::Matrix3Xd rel = X.colwise() - X.col(0);
-  const double quantum = 1e-9 * std::max(1e-12, rel.cwiseAbs().maxCoeff());
+  Eigen::Matrix3Xd rel = X.colwise() - X.col(0);
+  const double quantum = std::exp2(std::ceil(std::log2(1e-12 * std::max(1e-12, rel.cwiseAbs().maxCoeff()))));
   std::string key(static_cast<std::size_t>(rel.size()) * sizeof(long long), '\0');
   for (Eigen::Index i = 0; i < rel.size(); ++i) {
     const long long q = std::llround(rel.data()[i] / quantum);
     std::memcpy(key.data() + static_cast<std::size_t>(i) * sizeof(long long), &q, sizeof q);
+    rel.data()[i] = static_cast<double>(q) * quantum;
   }
   // Cap the cache so unstructured meshes (all shapes distinct) do not hold every element matrix.
   constexpr std::size_t kMaxCached = 4096;
   if (auto it = cache_.find(key); it != cache_.end()) return stored_[it->second];
   if (cache_.size() < kMaxCached) {
     cache_.emplace(key, stored_.size());
-    stored_.push_back(compute_stiffness(e));
+    stored_.push_back(compute_stiffness(rel));
     return stored_.back();
   }
-  scratch_ = compute_stiffness(e);
+  scratch_ = compute_stiffness(rel);
   return scratch_;
 }
 

@@ -43,7 +43,7 @@ class ElementOperators {
   std::size_t distinct_shapes() const { return cache_.size(); }
 
  private:
-  Eigen::MatrixXd compute_stiffness(int e) const;
+  Eigen::MatrixXd compute_stiffness(const Eigen::Matrix3Xd& X) const;
   static void strain_matrix(const Eigen::MatrixX3d& dNdx, Eigen::MatrixXd& B);
 
   const Mesh& mesh_;

@@ -3,6 +3,7 @@
 #include <Eigen/CholmodSupport>
 
 #include <chrono>
+#include <mutex>
 #include <stdexcept>
 
 namespace drom::fem {
@@ -26,6 +27,12 @@ SpdSolver& SpdSolver::operator=(SpdSolver&&) noexcept = default;
 
 void SpdSolver::factorize(const Eigen::SparseMatrix<double>& K) {
   if (!impl_->analyzed || impl_->size != K.rows()) {
+    // CHOLMOD orders with METIS, whose random generator is process-global: two analyses at once
+    // interleave it and get different orderings (and different round-off), so concurrent solvers
+    // would not give reproducible results. One analysis at a time; each reseeds, so every solver
+    // of the same pattern gets the same ordering.
+    static std::mutex analysis;
+    std::lock_guard<std::mutex> lock(analysis);
     const auto t0 = std::chrono::steady_clock::now();
     impl_->llt.analyzePattern(K);
     impl_->analyzed = true;

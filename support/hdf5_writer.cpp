@@ -16,6 +16,7 @@ void write_dataset(hid_t file, const std::string& name, const void* data, hid_t 
   const hsize_t dims[2] = {rows, cols};
   const hid_t space = H5Screate_simple(rank, dims, nullptr);
   const hid_t props = H5Pcreate(H5P_DATASET_CREATE);
+  H5Pset_obj_track_times(props, 0);  // no timestamps: identical content gives identical files
   if (rows * cols >= 4096 && rows > 0 && cols > 0) {
     const hsize_t chunk[2] = {1, cols};
     const hsize_t chunk1[1] = {std::min<hsize_t>(rows, 65536)};

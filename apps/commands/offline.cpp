@@ -1,0 +1,352 @@
+// drom offline / drom truth: the machining simulation, station by station (issue 4).
+//   offline: one response per unit stress profile -> B1 (target-surface w over stations), B2 (free
+//            final shape), the snapshot database of design.md §5;
+//   truth:   the same for the case's own profile, with full fields: what later plays the real part.
+// Both checkpoint every station, resume with --resume, and write database.h5 atomically at the end.
+#include "apps/case_setup.hpp"
+#include "apps/commands.hpp"
+#include "apps/summary.hpp"
+#include "fem/elastic_problem.hpp"
+#include "fem/element_samples.hpp"
+#include "fem/supports.hpp"
+#include "fem/target_surface.hpp"
+#include "fem/vtk_output.hpp"
+#include "support/atomic_file.hpp"
+#include "support/hdf5_writer.hpp"
+#include "support/input_error.hpp"
+#include "support/resources.hpp"
+
+#include <atomic>
+#include <chrono>
+#include <cinttypes>
+#include <cstdio>
+#include <exception>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <sstream>
+#include <thread>
+#include <dlfcn.h>
+#include <unistd.h>
+
+namespace drom::app {
+
+namespace {
+
+std::uint64_t fnv1a(const void* data, std::size_t bytes, std::uint64_t hash = 1469598103934665603ull) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
+  return hash;
+}
+
+std::string hex(std::uint64_t v) {
+  char buf[20];
+  std::snprintf(buf, sizeof buf, "%016" PRIx64, v);
+  return buf;
+}
+
+// Per-station results on disk, so an interrupted run loses no finished station.
+class Checkpoint {
+ public:
+  Checkpoint(std::filesystem::path dir, const std::string& identity, bool resume) : dir_(std::move(dir)) {
+    const auto manifest = dir_ / "manifest.txt";
+    if (std::filesystem::exists(manifest)) {
+      std::ifstream in(manifest);
+      std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      if (found != identity)
+        throw InputError(dir_.string() + ": holds an unfinished run of a different case or mode; it will not be mixed with this one "
+                                         "(remove the folder or choose another --out)");
+      if (!resume) throw InputError(dir_.string() + ": an unfinished run is here; pass --resume to continue it, or remove the folder");
+    } else {
+      std::filesystem::create_directories(dir_);
+      write_file_atomically(manifest, identity);
+    }
+  }
+  std::filesystem::path file(const std::string& name) const { return dir_ / (name + ".bin"); }
+  bool has(const std::string& name) const { return std::filesystem::exists(file(name)); }
+  void save(const std::string& name, const Eigen::MatrixXd& m) const {
+    std::string bytes(sizeof(Eigen::Index) * 2 + sizeof(double) * static_cast<std::size_t>(m.size()), '\0');
+    const Eigen::Index dims[2] = {m.rows(), m.cols()};
+    std::memcpy(bytes.data(), dims, sizeof dims);
+    std::memcpy(bytes.data() + sizeof dims, m.data(), sizeof(double) * static_cast<std::size_t>(m.size()));
+    write_file_atomically(file(name), bytes);
+  }
+  Eigen::MatrixXd load(const std::string& name) const {
+    std::ifstream in(file(name), std::ios::binary);
+    Eigen::Index dims[2] = {0, 0};
+    in.read(reinterpret_cast<char*>(dims), sizeof dims);
+    Eigen::MatrixXd m(dims[0], dims[1]);
+    in.read(reinterpret_cast<char*>(m.data()), static_cast<std::streamsize>(sizeof(double) * static_cast<std::size_t>(m.size())));
+    if (!in) throw InputError(file(name).string() + ": truncated checkpoint");
+    return m;
+  }
+  void remove() const { std::filesystem::remove_all(dir_); }
+
+ private:
+  std::filesystem::path dir_;
+};
+
+std::string station_name(std::size_t k) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "station_%05zu", k);
+  return buf;
+}
+
+void write_field(const std::filesystem::path& path, const fem::ElasticProblem& problem, const Eigen::VectorXd& u) {
+  const auto stresses = problem.element_stresses(0, u);
+  std::vector<double> vm(stresses.size());
+  for (std::size_t e = 0; e < stresses.size(); ++e) vm[e] = fem::von_mises(stresses[e]);
+  std::vector<char> keep(problem.activity().size());
+  for (std::size_t e = 0; e < keep.size(); ++e) keep[e] = problem.activity()[e] > 0;
+  fem::VtuFields fields;
+  fields.point_vectors = {{"displacement", u}};
+  fields.cell_scalars = {{"von_mises", vm}, {"activity", problem.activity()}};
+  fields.cell_tensors = {{"stress", stresses}};
+  fem::write_vtu(path, problem.mesh(), fields, keep);
+}
+
+int simulate(const CommandOptions& options, bool truth) {
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  const bool interactive = isatty(2) != 0;
+  const Case c = load_case(options.case_path, options.overrides);
+  const PartModel part = build_part(c);
+  const auto& mesh = part.mesh;
+  const auto clamped = clamp_dofs(c, part);
+  std::vector<int> target;
+  try {
+    target = fem::target_surface_nodes(mesh, part.shape, {c.pocket_x, c.pocket_x + c.pocket_length_x, c.pocket_y, c.pocket_y + c.pocket_length_y,
+                                                          part.shape.thickness() - c.pocket_depth});
+  } catch (const std::invalid_argument& e) {
+    throw InputError(c.origin + ": mesh.nz: " + e.what());
+  }
+  const std::vector<fem::StressProfile> profiles = truth ? std::vector<fem::StressProfile>{part.profile} : fem::unit_profiles(part.degrees);
+  const auto P = static_cast<Eigen::Index>(profiles.size());
+  const std::string mode = truth ? "truth" : "offline";
+  const std::uint64_t case_hash = fnv1a(c.resolved_toml.data(), c.resolved_toml.size());
+  Checkpoint checkpoint(options.out / ".checkpoint", mode + " " + hex(case_hash) + "\n", options.resume);
+
+  // 1. Removal: the activity of every station (level set, a few seconds).
+  const levelset::Tool tool = build_tool(c);
+  const levelset::Toolpath path = build_toolpath(c, part);
+  const levelset::PathTimeline timeline(path);
+  const auto stations = c.stations == "waypoints" ? levelset::stations_at_waypoints(path, timeline)
+                                                  : levelset::stations_by_spacing(path, timeline, c.station_spacing);
+  if (stations.empty()) throw InputError(c.origin + ": the toolpath has no cutting move, so there is no station");
+  const std::size_t ns = stations.size();
+  const double voxel = voxel_size_for(c, part);
+  std::vector<std::vector<double>> activity(ns);
+  {
+    levelset::MaterialRemoval removal(build_workpiece(c, part, voxel), tool, voxel);
+    const auto samples = fem::element_samples(mesh, 2 * 3 * voxel);
+    const auto criterion = c.removal_criterion == "centroid" ? levelset::RemovalCriterion::Centroid : levelset::RemovalCriterion::VolumeFraction;
+    std::vector<double> remaining(static_cast<std::size_t>(mesh.element_count()), 1.0);
+    double previous = 0;
+    for (std::size_t k = 0; k < ns; ++k) {
+      removal.sweep(levelset::cutting_polylines(path, timeline, previous, stations[k].path_length, 0.01));
+      previous = stations[k].path_length;
+      removal.update_remaining(samples, criterion, remaining, true);
+      activity[k] = remaining;
+    }
+  }
+  const double removal_seconds = elapsed();
+  if (!options.quiet)
+    std::cerr << "drom " << mode << ": " << c.name << ": " << ns << " stations, " << mesh.dof_count() << " unknowns, " << P << " profile"
+              << (P > 1 ? "s" : "") << ", " << target.size() << " target-surface nodes (removal " << removal_seconds << " s)\n";
+
+  // 2. Equilibrate once; every worker adopts it.
+  fem::ElasticProblem base(mesh, part.shape, part.material, profiles);
+  base.equilibrate(fem::isostatic_dofs(mesh, part.shape, std::vector<char>(static_cast<std::size_t>(mesh.node_count()), 1)));
+
+  // 3. Stations, in parallel (independent given activity), each one checkpointed.
+  const int threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  {
+    // Station workers fill the cores; BLAS threads inside each factorization would fight them
+    // (measured: a third of the run in system time). Single-threaded BLAS also rounds the same way
+    // whatever --threads is, so the database does not depend on it. OpenBLAS exposes its setter.
+    using SetThreads = void (*)(int);
+    if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(1);
+  }
+  const std::size_t frames = truth ? static_cast<std::size_t>(std::max(1, std::min<int>(c.frames, static_cast<int>(ns)))) : 0;
+  auto is_frame = [&](std::size_t k) { return frames > 0 && ((k + 1) * frames / ns != k * frames / ns || k + 1 == ns); };
+  std::atomic<std::size_t> next{0};
+  std::atomic<int> solved{0};
+  std::mutex report;
+  std::exception_ptr failure;
+  double factorize_seconds = 0, assembly_seconds = 0, analyze_seconds = 0;
+  std::size_t done_before = 0;
+  for (std::size_t k = 0; k < ns; ++k) done_before += checkpoint.has(station_name(k));
+  auto worker = [&] {
+    try {
+      fem::ElasticProblem problem(mesh, part.shape, part.material, profiles);
+      problem.adopt_equilibrium(base);
+      problem.set_fixed_dofs(clamped);
+      for (std::size_t k = next++; k < ns; k = next++) {
+        if (checkpoint.has(station_name(k))) continue;
+        if (options.stop_after >= 0 && solved.fetch_add(1) >= options.stop_after) break;
+        problem.set_activity(activity[k]);
+        problem.assemble_and_factorize();
+        const Eigen::MatrixXd U = problem.solve();
+        Eigen::MatrixXd W(static_cast<Eigen::Index>(target.size()), P);
+        for (std::size_t i = 0; i < target.size(); ++i) W.row(static_cast<Eigen::Index>(i)) = U.row(3 * target[i] + 2);
+        if (is_frame(k)) write_field(options.out / "frames" / (station_name(k) + ".vtu"), problem, U.col(0));
+        checkpoint.save(station_name(k), W);
+        std::lock_guard<std::mutex> lock(report);
+        const auto done = static_cast<double>(++done_before);
+        if (!options.quiet) {
+          const double rate = (done) / std::max(1e-9, elapsed() - removal_seconds);
+          std::fprintf(stderr, "%s  station %zu/%zu  %.2f stations/s  %.0f s left%s", interactive ? "\r" : "", static_cast<std::size_t>(done), ns, rate,
+                       (static_cast<double>(ns) - done) / rate, interactive ? "   " : "\n");
+        }
+      }
+      std::lock_guard<std::mutex> lock(report);
+      factorize_seconds += problem.solver_stats().factorize_seconds;
+      analyze_seconds += problem.solver_stats().analyze_seconds;
+      assembly_seconds += problem.assembly_seconds();
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(report);
+      failure = std::current_exception();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+  if (!options.quiet && interactive) std::cerr << "\n";
+  if (failure) std::rethrow_exception(failure);
+  std::size_t finished = 0;
+  for (std::size_t k = 0; k < ns; ++k) finished += checkpoint.has(station_name(k));
+  if (finished < ns) {
+    if (!options.quiet) std::cerr << "drom " << mode << ": stopped after " << finished << " of " << ns << " stations; continue with --resume\n";
+    return 0;
+  }
+
+  // 4. The free final shape (3-2-1, best-fit alignment), one column per profile.
+  if (!checkpoint.has("final")) {
+    fem::ElasticProblem problem(mesh, part.shape, part.material, profiles);
+    problem.adopt_equilibrium(base);
+    problem.set_activity(activity.back());
+    const auto live = problem.live_nodes();
+    problem.set_fixed_dofs(fem::isostatic_dofs(mesh, part.shape, live));
+    problem.assemble_and_factorize();
+    Eigen::MatrixXd U = problem.solve();
+    std::vector<int> live_list;
+    for (int n = 0; n < mesh.node_count(); ++n)
+      if (live[static_cast<std::size_t>(n)]) live_list.push_back(n);
+    for (Eigen::Index p = 0; p < P; ++p) {
+      Eigen::VectorXd u = U.col(p);
+      fem::remove_rigid_motion(mesh, live_list, u);
+      for (int d = 0; d < mesh.dof_count(); ++d)
+        if (problem.orphan_dofs()[static_cast<std::size_t>(d)]) u[d] = 0;
+      U.col(p) = u;
+    }
+    if (truth) write_field(options.out / "final_free_shape.vtu", problem, U.col(0));
+    checkpoint.save("final", U);
+  }
+
+  // 5. The database, from the checkpoints (so a resumed run writes the same bytes).
+  const auto nt = target.size();
+  std::vector<double> B1(ns * nt * static_cast<std::size_t>(P));
+  for (std::size_t k = 0; k < ns; ++k) {
+    const Eigen::MatrixXd W = checkpoint.load(station_name(k));
+    for (std::size_t i = 0; i < nt; ++i)
+      for (Eigen::Index p = 0; p < P; ++p) B1[(k * nt + i) * static_cast<std::size_t>(P) + static_cast<std::size_t>(p)] = W(static_cast<Eigen::Index>(i), p);
+  }
+  const Eigen::MatrixXd U2 = checkpoint.load("final");
+  std::vector<double> B2(static_cast<std::size_t>(U2.size()));
+  for (Eigen::Index r = 0; r < U2.rows(); ++r)
+    for (Eigen::Index p = 0; p < P; ++p) B2[static_cast<std::size_t>(r * P + p)] = U2(r, p);
+  std::vector<double> time(ns), length(ns), position(3 * ns), target_xyz(3 * nt), target_ids(nt), nodes(3 * static_cast<std::size_t>(mesh.node_count()));
+  for (std::size_t k = 0; k < ns; ++k) {
+    time[k] = stations[k].time;
+    length[k] = stations[k].path_length;
+    for (int d = 0; d < 3; ++d) position[3 * k + static_cast<std::size_t>(d)] = stations[k].position[d];
+  }
+  for (std::size_t i = 0; i < nt; ++i) {
+    target_ids[i] = target[i];
+    for (int d = 0; d < 3; ++d) target_xyz[3 * i + static_cast<std::size_t>(d)] = mesh.nodes[static_cast<std::size_t>(target[i])][d];
+  }
+  for (int n = 0; n < mesh.node_count(); ++n)
+    for (int d = 0; d < 3; ++d) nodes[3 * static_cast<std::size_t>(n) + static_cast<std::size_t>(d)] = mesh.nodes[static_cast<std::size_t>(n)][d];
+  std::vector<double> connectivity(mesh.connectivity.begin(), mesh.connectivity.end());
+  std::vector<double> unit(2 * static_cast<std::size_t>(P));
+  for (Eigen::Index p = 0; p < P; ++p) {
+    const auto& prof = profiles[static_cast<std::size_t>(p)];
+    for (std::size_t j = 0; j < prof.degrees.size(); ++j) {
+      if (prof.sigma11[j] != 0) unit[2 * static_cast<std::size_t>(p)] = 11, unit[2 * static_cast<std::size_t>(p) + 1] = prof.degrees[j];
+      if (prof.sigma22[j] != 0) unit[2 * static_cast<std::size_t>(p)] = 22, unit[2 * static_cast<std::size_t>(p) + 1] = prof.degrees[j];
+    }
+  }
+  std::uint64_t content = fnv1a(B1.data(), B1.size() * sizeof(double), case_hash);
+  content = fnv1a(B2.data(), B2.size() * sizeof(double), content);
+  {
+    Hdf5Writer h5(options.out / "database.h5");
+    h5.write("B1", B1, ns * nt, static_cast<std::size_t>(P));
+    h5.write("B2", B2, static_cast<std::size_t>(U2.rows()), static_cast<std::size_t>(P));
+    h5.write("station_time", time, ns, 1);
+    h5.write("station_path_length", length, ns, 1);
+    h5.write("station_position", position, ns, 3);
+    h5.write("target_nodes", target_ids, nt, 1);
+    h5.write("target_coordinates", target_xyz, nt, 3);
+    h5.write("node_coordinates", nodes, static_cast<std::size_t>(mesh.node_count()), 3);
+    h5.write("connectivity", connectivity, static_cast<std::size_t>(mesh.element_count()), static_cast<std::size_t>(fem::nodes_per_element(mesh.type)));
+    h5.write("final_activity", activity.back(), activity.back().size(), 1);
+    if (truth) {
+      std::vector<double> coefficients(part.profile.sigma11);
+      coefficients.insert(coefficients.end(), part.profile.sigma22.begin(), part.profile.sigma22.end());
+      h5.write("profile_coefficients", coefficients, 2, part.profile.degrees.size());
+    } else {
+      h5.write("unit_profiles", unit, static_cast<std::size_t>(P), 2);
+    }
+    std::vector<double> degrees(part.degrees.begin(), part.degrees.end());
+    h5.write("profile_degrees", degrees, degrees.size(), 1);
+    h5.attribute("kind", mode);
+    h5.attribute("case", c.resolved_toml);
+    h5.attribute("case_hash", hex(case_hash));
+    h5.attribute("content_hash", hex(content));
+    h5.attribute("element", std::string(fem::element_name(mesh.type)));
+    h5.attribute("layout", std::string("B1[(station * n_target + i), profile] = w of target node i at the station; "
+                                       "B2[3 * node + component, profile] = free final shape after best-fit alignment"));
+    h5.commit();
+  }
+  if (truth) {
+    fem::PvdCollection pvd;
+    for (std::size_t k = 0; k < ns; ++k)
+      if (is_frame(k)) pvd.add(time[k], std::filesystem::path("frames") / (station_name(k) + ".vtu"));
+    pvd.write(options.out / "truth.pvd");
+  }
+  checkpoint.remove();
+
+  double max_w = 0;
+  for (double v : B1) max_w = std::max(max_w, std::abs(v));
+  const auto db_size = std::filesystem::file_size(options.out / "database.h5");
+  write_summary(options.out, {{"command", mode},
+                              {"case", c.name},
+                              {"stations", ns},
+                              {"unknowns", mesh.dof_count()},
+                              {"profiles", P},
+                              {"target_nodes", nt},
+                              {"threads", threads},
+                              {"time_s", elapsed()},
+                              {"removal_time_s", removal_seconds},
+                              {"time_per_station_s", (elapsed() - removal_seconds) / static_cast<double>(ns)},
+                              {"solver_time_s", {{"assembly", assembly_seconds}, {"analyze", analyze_seconds}, {"factorize", factorize_seconds}}},
+                              {"peak_memory_mb", static_cast<double>(peak_memory_bytes()) / 1048576.0},
+                              {"database_mb", static_cast<double>(db_size) / 1048576.0},
+                              {"max_abs_B1_mm", max_w},
+                              {"case_hash", hex(case_hash)},
+                              {"content_hash", hex(content)},
+                              {"machine", machine_info()},
+                              {"files", truth ? nlohmann::json{"database.h5", "truth.pvd", "frames/", "final_free_shape.vtu"} : nlohmann::json{"database.h5"}}});
+  if (!options.quiet)
+    std::printf("drom %s: %s: %zu stations x %lld profile(s), %d unknowns, %.1f s (%.2f s per station on %d threads) -> %s/database.h5 (%.1f MB)\n",
+                mode.c_str(), c.name.c_str(), ns, static_cast<long long>(P), mesh.dof_count(), elapsed(), (elapsed() - removal_seconds) / static_cast<double>(ns),
+                threads, options.out.string().c_str(), static_cast<double>(db_size) / 1048576.0);
+  return 0;
+}
+
+}  // namespace
+
+int offline_command(const CommandOptions& options) { return simulate(options, false); }
+int truth_command(const CommandOptions& options) { return simulate(options, true); }
+
+}  // namespace drom::app

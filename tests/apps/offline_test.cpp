@@ -1,0 +1,169 @@
+// Issue 4 checks on coarse versions of both cases: superposition, station interpolation, resume,
+// refusing to mix cases, and the physics (panel sag, plate saddle).
+#include "fem/residual_stress.hpp"
+#include "support/hdf5_reader.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sys/wait.h>
+
+namespace {
+
+std::string run(const std::string& args) {
+  const std::string cmd = std::string(DROM_BINARY) + " " + args + " --quiet 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf;
+  while (std::fgets(buf.data(), buf.size(), pipe)) out += buf.data();
+  const int status = pclose(pipe);
+  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return code == 0 ? "" : "exit " + std::to_string(code) + ": " + out;
+}
+
+std::filesystem::path dir(const std::string& name) {
+  const auto d = std::filesystem::temp_directory_path() / "drom_offline_tests" / name;
+  std::filesystem::remove_all(d);
+  return d;
+}
+
+// Coarse flat plate: 100 mm elements, a station every 300 mm of cut, 1 mm voxels.
+const std::string kPlate =
+    " --set mesh.nx=10 --set mesh.ny=10 --set path.station_spacing=300 --set removal.voxel_size=1.0 --set removal.frames=2"
+    " --set clamps.0.box=[0,100,0,100] --set clamps.1.box=[900,1000,0,100] --set clamps.2.box=[0,100,900,1000] --set clamps.3.box=[900,1000,900,1000]";
+const std::string kPanel = std::string(DROM_SOURCE_DIR) + "/cases/curved_panel.toml --set mesh.nx=12 --set mesh.ny=12 --set path.station_spacing=150"
+                                                          " --set removal.voxel_size=0.5 --set removal.frames=2";
+
+Eigen::MatrixXd as_matrix(const drom::Hdf5Matrix& m) {
+  Eigen::MatrixXd r(static_cast<Eigen::Index>(m.rows), static_cast<Eigen::Index>(m.cols));
+  for (std::size_t i = 0; i < m.rows; ++i)
+    for (std::size_t j = 0; j < m.cols; ++j) r(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = m(i, j);
+  return r;
+}
+
+double relative(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) { return (a - b).cwiseAbs().maxCoeff() / b.cwiseAbs().maxCoeff(); }
+
+}  // namespace
+
+TEST(Offline, TruthEqualsSuperposedUnitResponses) {
+  const auto off = dir("super_offline"), tru = dir("super_truth");
+  ASSERT_EQ(run("offline" + kPlate + " --out " + off.string()), "");
+  ASSERT_EQ(run("truth" + kPlate + " --out " + tru.string()), "");
+  drom::Hdf5Reader db(off / "database.h5"), truth(tru / "database.h5");
+  EXPECT_EQ(db.text_attribute("kind"), "offline");
+  EXPECT_EQ(db.text_attribute("case_hash"), truth.text_attribute("case_hash"));
+  // The case's profile in the unit basis: sigma11 coefficients, then sigma22.
+  const drom::fem::StressProfile profile{{2, 4, 6}, {-60, 30, -15}, {-40, 20, -10}};
+  const Eigen::VectorXd a = drom::fem::profile_weights(profile);
+  const Eigen::MatrixXd B1 = as_matrix(db.matrix("B1")), B2 = as_matrix(db.matrix("B2"));
+  ASSERT_EQ(B1.cols(), 6);
+  const double e1 = relative(B1 * a, as_matrix(truth.matrix("B1"))), e2 = relative(B2 * a, as_matrix(truth.matrix("B2")));
+  std::printf("superposition: B1 a vs truth %.2e, B2 a vs truth %.2e (relative)\n", e1, e2);
+  EXPECT_LT(e1, 1e-8);
+  EXPECT_LT(e2, 1e-8);
+  EXPECT_GT(as_matrix(truth.matrix("B1")).cwiseAbs().maxCoeff(), 1e-3);  // something moved
+  EXPECT_TRUE(std::filesystem::exists(tru / "truth.pvd"));
+  EXPECT_TRUE(std::filesystem::exists(tru / "final_free_shape.vtu"));
+  EXPECT_FALSE(std::filesystem::exists(off / ".checkpoint"));
+}
+
+TEST(Offline, ResumedRunWritesTheSameDatabase) {
+  const auto whole = dir("resume_whole"), parts = dir("resume_parts");
+  ASSERT_EQ(run("truth" + kPlate + " --out " + whole.string()), "");
+  ASSERT_EQ(run("truth" + kPlate + " --stop-after 7 --out " + parts.string()), "");  // "killed" after 7 stations
+  EXPECT_TRUE(std::filesystem::exists(parts / ".checkpoint"));
+  EXPECT_FALSE(std::filesystem::exists(parts / "database.h5"));
+  // A plain rerun refuses to overwrite, and a different case refuses to mix.
+  EXPECT_NE(run("truth" + kPlate + " --out " + parts.string()).find("pass --resume"), std::string::npos);
+  EXPECT_NE(run("truth" + kPlate + " --set stress.sigma11=[1,2,3] --resume --out " + parts.string()).find("different case"), std::string::npos);
+  ASSERT_EQ(run("truth" + kPlate + " --stop-after 5 --resume --out " + parts.string()), "");
+  ASSERT_EQ(run("truth" + kPlate + " --resume --out " + parts.string()), "");
+  drom::Hdf5Reader a(whole / "database.h5"), b(parts / "database.h5");
+  EXPECT_EQ(a.text_attribute("content_hash"), b.text_attribute("content_hash"));
+  for (const char* name : {"B1", "B2", "station_time", "station_position", "target_coordinates"})
+    EXPECT_EQ(a.matrix(name).data, b.matrix(name).data) << name;
+  // Byte for byte, too: no timestamps in the file.
+  std::ifstream fa(whole / "database.h5", std::ios::binary), fb(parts / "database.h5", std::ios::binary);
+  const std::string ba((std::istreambuf_iterator<char>(fa)), {}), bb((std::istreambuf_iterator<char>(fb)), {});
+  EXPECT_TRUE(ba == bb);
+}
+
+TEST(Offline, StationInterpolationErrorIsBounded) {
+  // Stations every 300 mm, and every 150 mm (which adds the midpoints): interpolate the coarse run
+  // linearly in time at the fine run's extra stations.
+  const auto coarse = dir("interp_coarse"), fine = dir("interp_fine");
+  ASSERT_EQ(run("truth" + kPlate + " --out " + coarse.string()), "");
+  ASSERT_EQ(run("truth" + kPlate + " --set path.station_spacing=150 --out " + fine.string()), "");
+  drom::Hdf5Reader c(coarse / "database.h5"), f(fine / "database.h5");
+  const auto tc = c.matrix("station_time"), tf = f.matrix("station_time");
+  const Eigen::MatrixXd Bc = as_matrix(c.matrix("B1")), Bf = as_matrix(f.matrix("B1"));
+  const auto nt = static_cast<Eigen::Index>(c.matrix("target_nodes").rows);
+  double worst = 0, worst_step = 0;
+  for (std::size_t k = 0; k + 1 < tc.rows; ++k) {
+    worst_step = std::max(worst_step, (Bc.middleRows(static_cast<Eigen::Index>(k + 1) * nt, nt) - Bc.middleRows(static_cast<Eigen::Index>(k) * nt, nt)).cwiseAbs().maxCoeff());
+    for (std::size_t j = 0; j < tf.rows; ++j) {
+      const double t = tf.data[j];
+      if (t <= tc.data[k] + 1e-9 || t >= tc.data[k + 1] - 1e-9) continue;
+      const double s = (t - tc.data[k]) / (tc.data[k + 1] - tc.data[k]);
+      const Eigen::MatrixXd interp = (1 - s) * Bc.middleRows(static_cast<Eigen::Index>(k) * nt, nt) + s * Bc.middleRows(static_cast<Eigen::Index>(k + 1) * nt, nt);
+      worst = std::max(worst, (interp - Bf.middleRows(static_cast<Eigen::Index>(j) * nt, nt)).cwiseAbs().maxCoeff());
+    }
+  }
+  std::printf("station interpolation: max error %.2e mm, largest change between stations %.2e mm\n", worst, worst_step);
+  EXPECT_GT(worst_step, 0);
+  EXPECT_LE(worst, 0.5 * worst_step);
+}
+
+TEST(Offline, PanelSagsMostAtTheCentreAndMoreAsMaterialGoes) {
+  const auto out = dir("panel");
+  ASSERT_EQ(run("truth " + kPanel + " --out " + out.string()), "");
+  drom::Hdf5Reader db(out / "database.h5");
+  const Eigen::MatrixXd B1 = as_matrix(db.matrix("B1"));
+  const auto xyz = db.matrix("target_coordinates");
+  const auto nt = static_cast<Eigen::Index>(xyz.rows);
+  const auto ns = static_cast<Eigen::Index>(db.matrix("station_time").rows);
+  // The node nearest the pocket's centre (x = 225, y = 225).
+  Eigen::Index centre = 0;
+  double best = 1e300;
+  for (Eigen::Index i = 0; i < nt; ++i) {
+    const double d = std::hypot(xyz(static_cast<std::size_t>(i), 0) - 225, xyz(static_cast<std::size_t>(i), 1) - 225);
+    if (d < best) best = d, centre = i;
+  }
+  const Eigen::VectorXd last = B1.middleRows((ns - 1) * nt, nt).col(0);
+  std::printf("panel: centre w %.4f mm at the last station, max |w| %.4f mm\n", last[centre], last.cwiseAbs().maxCoeff());
+  EXPECT_NEAR(std::abs(last[centre]), last.cwiseAbs().maxCoeff(), 0.05 * last.cwiseAbs().maxCoeff());
+  // Sag at the centre grows with removed material: compare quarter, half and end of the run.
+  const double q = std::abs(B1(((ns - 1) / 4) * nt + centre, 0)), h = std::abs(B1(((ns - 1) / 2) * nt + centre, 0));
+  std::printf("panel: centre |w| at 1/4, 1/2, end of the stations: %.4f, %.4f, %.4f mm\n", q, h, std::abs(last[centre]));
+  EXPECT_LT(q, h);
+  EXPECT_LT(h, std::abs(last[centre]));
+}
+
+TEST(Offline, PlateWithOppositeProfilesEndsAsASaddle) {
+  const auto out = dir("saddle");
+  ASSERT_EQ(run("truth" + kPlate + " --set stress.sigma11=[-60,30,-15] --set stress.sigma22=[60,-30,15] --out " + out.string()), "");
+  drom::Hdf5Reader db(out / "database.h5");
+  const auto nodes = db.matrix("node_coordinates");
+  const Eigen::MatrixXd B2 = as_matrix(db.matrix("B2"));
+  // Fit w = c0 + c1 x + c2 y + c3 x^2 + c4 xy + c5 y^2 over the bottom face.
+  std::vector<Eigen::Matrix<double, 1, 6>> rows;
+  std::vector<double> w;
+  for (std::size_t n = 0; n < nodes.rows; ++n) {
+    if (nodes(n, 2) > 1e-9) continue;
+    const double x = nodes(n, 0) - 500, y = nodes(n, 1) - 500;
+    rows.push_back((Eigen::Matrix<double, 1, 6>() << 1, x, y, x * x, x * y, y * y).finished());
+    w.push_back(B2(static_cast<Eigen::Index>(3 * n + 2), 0));
+  }
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(rows.size()), 6);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(rows.size()));
+  for (std::size_t i = 0; i < rows.size(); ++i) A.row(static_cast<Eigen::Index>(i)) = rows[i], b[static_cast<Eigen::Index>(i)] = w[i];
+  const Eigen::VectorXd c = A.colPivHouseholderQr().solve(b);
+  std::printf("free final shape: kx %.3e, ky %.3e 1/mm\n", -2 * c[3], -2 * c[5]);
+  EXPECT_LT(c[3] * c[5], 0);  // curvatures of opposite signs: a saddle
+}
