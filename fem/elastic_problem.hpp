@@ -60,6 +60,8 @@ class ElasticProblem {
   std::vector<Vector6d> element_stresses(int p, const Eigen::VectorXd& u) const;
 
   const SolverStats& solver_stats() const { return solver_.stats(); }
+  // The stiffness factorized by the last assemble_and_factorize() (lower triangle, held dofs).
+  const Eigen::SparseMatrix<double>& stiffness() const { return K_; }
   double assembly_seconds() const { return assembly_seconds_; }
   Eigen::Index unknowns() const { return static_cast<Eigen::Index>(mesh_.dof_count()); }
 

@@ -193,7 +193,8 @@ int simulate(const CommandOptions& options, bool truth) {
         checkpoint.save(station_name(k), W);
         std::lock_guard<std::mutex> lock(report);
         const auto done = static_cast<double>(++done_before);
-        if (!options.quiet) {
+        const bool report_now = interactive || static_cast<std::size_t>(done) % std::max<std::size_t>(1, ns / 50) == 0 || static_cast<std::size_t>(done) == ns;
+        if (!options.quiet && report_now) {
           const double rate = (done) / std::max(1e-9, elapsed() - removal_seconds);
           std::fprintf(stderr, "%s  station %zu/%zu  %.2f stations/s  %.0f s left%s", interactive ? "\r" : "", static_cast<std::size_t>(done), ns, rate,
                        (static_cast<double>(ns) - done) / rate, interactive ? "   " : "\n");
