@@ -4,10 +4,10 @@
 //   truth:   the same for the case's own profile, with full fields: what later plays the real part.
 // Both checkpoint every station, resume with --resume, and write database.h5 atomically at the end.
 #include "apps/case_setup.hpp"
+#include "apps/machining_run.hpp"
 #include "apps/commands.hpp"
 #include "apps/summary.hpp"
 #include "fem/elastic_problem.hpp"
-#include "fem/element_samples.hpp"
 #include "fem/supports.hpp"
 #include "fem/target_surface.hpp"
 #include "fem/vtk_output.hpp"
@@ -127,27 +127,14 @@ int simulate(const CommandOptions& options, bool truth) {
   Checkpoint checkpoint(options.out / ".checkpoint", mode + " " + hex(case_hash) + "\n", options.resume);
 
   // 1. Removal: the activity of every station (level set, a few seconds).
-  const levelset::Tool tool = build_tool(c);
-  const levelset::Toolpath path = build_toolpath(c, part);
-  const levelset::PathTimeline timeline(path);
-  const auto stations = c.stations == "waypoints" ? levelset::stations_at_waypoints(path, timeline)
-                                                  : levelset::stations_by_spacing(path, timeline, c.station_spacing);
-  if (stations.empty()) throw InputError(c.origin + ": the toolpath has no cutting move, so there is no station");
+  MachiningRun run(c, part);
+  const auto& stations = run.stations();
   const std::size_t ns = stations.size();
-  const double voxel = voxel_size_for(c, part);
   std::vector<std::vector<double>> activity(ns);
-  {
-    levelset::MaterialRemoval removal(build_workpiece(c, part, voxel), tool, voxel);
-    const auto samples = fem::element_samples(mesh, 2 * 3 * voxel);
-    const auto criterion = c.removal_criterion == "centroid" ? levelset::RemovalCriterion::Centroid : levelset::RemovalCriterion::VolumeFraction;
-    std::vector<double> remaining(static_cast<std::size_t>(mesh.element_count()), 1.0);
-    double previous = 0;
-    for (std::size_t k = 0; k < ns; ++k) {
-      removal.sweep(levelset::cutting_polylines(path, timeline, previous, stations[k].path_length, 0.01));
-      previous = stations[k].path_length;
-      removal.update_remaining(samples, criterion, remaining, true);
-      activity[k] = remaining;
-    }
+  std::vector<double> remaining(static_cast<std::size_t>(mesh.element_count()), 1.0);
+  for (std::size_t k = 0; k < ns; ++k) {
+    run.advance(remaining);
+    activity[k] = remaining;
   }
   const double removal_seconds = elapsed();
   if (!options.quiet)

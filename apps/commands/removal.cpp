@@ -1,5 +1,6 @@
 // drom removal: the material each tool station takes away, on the case's mesh (issue 3).
 #include "apps/case_setup.hpp"
+#include "apps/machining_run.hpp"
 #include "apps/commands.hpp"
 #include "apps/summary.hpp"
 #include "fem/element_samples.hpp"
@@ -23,17 +24,12 @@ int removal_command(const CommandOptions& options) {
   const Case c = load_case(options.case_path, options.overrides);
   const PartModel part = build_part(c);
   const auto& mesh = part.mesh;
-  const levelset::Tool tool = build_tool(c);
-  const levelset::Toolpath path = build_toolpath(c, part);
-  const levelset::PathTimeline timeline(path);
-  const auto stations = c.stations == "waypoints" ? levelset::stations_at_waypoints(path, timeline)
-                                                  : levelset::stations_by_spacing(path, timeline, c.station_spacing);
-  if (stations.empty()) throw InputError(c.origin + ": the toolpath has no cutting move, so there is no station");
-  const double voxel = voxel_size_for(c, part);
-  levelset::MaterialRemoval removal(build_workpiece(c, part, voxel), tool, voxel);
-  const auto samples = fem::element_samples(mesh, 2 * 3 * voxel);  // sample cells as wide as the narrow band
+  MachiningRun run(c, part);
+  const auto& path = run.path();
+  const auto& timeline = run.timeline();
+  const auto& stations = run.stations();
+  const double voxel = run.voxel_size();
   const auto volumes = fem::element_volumes(mesh);
-  const auto criterion = c.removal_criterion == "centroid" ? levelset::RemovalCriterion::Centroid : levelset::RemovalCriterion::VolumeFraction;
   if (!options.quiet)
     std::cerr << c.name << ": " << path.moves.size() << " moves, " << stations.size() << " stations, " << mesh.element_count() << " elements, voxel "
               << voxel << " mm\n";
@@ -47,18 +43,15 @@ int removal_command(const CommandOptions& options) {
   fem::PvdCollection pvd;
   std::ostringstream csv;
   csv << "station,time_s,path_length_mm,x,y,z,removed_mm3,station_removed_mm3,mesh_removed_mm3\n";
-  double previous_length = 0;
   const bool interactive = isatty(2) != 0;
   for (std::size_t k = 0; k < ns; ++k) {
-    const double added = removal.sweep(levelset::cutting_polylines(path, timeline, previous_length, stations[k].path_length, 0.01));
-    previous_length = stations[k].path_length;
-    removal.update_remaining(samples, criterion, remaining, true);
+    const double added = run.advance(remaining);
     double gone = 0;
     for (std::size_t e = 0; e < ne; ++e) {
       activity.push_back(static_cast<float>(remaining[e]));
       gone += (1 - remaining[e]) * volumes[e];
     }
-    removed[k] = removal.removed_volume();
+    removed[k] = run.removal().removed_volume();
     mesh_removed[k] = gone;
     time[k] = stations[k].time;
     length[k] = stations[k].path_length;
@@ -90,7 +83,7 @@ int removal_command(const CommandOptions& options) {
   pvd.write(options.out / "removal.pvd");
   write_file_atomically(options.out / "volumes.csv", csv.str());
   write_file_atomically(options.out / "toolpath.nc", levelset::write_gcode(path, c.name + " toolpath"));
-  removal.write_surface(options.out / "removed_surface.vtp");
+  run.removal().write_surface(options.out / "removed_surface.vtp");
   {
     Hdf5Writer h5(options.out / "removal.h5");
     h5.write("activity", activity, ns, ne);
@@ -105,6 +98,7 @@ int removal_command(const CommandOptions& options) {
     h5.attribute("voxel_size_mm", voxel);
     h5.commit();
   }
+  const auto& removal = run.removal();
   const double measured = removal.measured_volume();
   write_summary(options.out, {{"command", "removal"},
                               {"case", c.name},

@@ -1,4 +1,6 @@
 // The drom binary itself: exit codes and messages for bad input, and a small end-to-end run.
+#include "drom_process.hpp"
+
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -8,24 +10,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sys/wait.h>
 
 namespace {
 
-struct Result {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
-
-Result drom(const std::string& args) {
-  const std::string cmd = std::string(DROM_BINARY) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), buf.size(), pipe)) out += buf.data();
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+DromResult drom(const std::string& args) { return run_drom(args); }
 
 std::filesystem::path temp_dir() {
   const auto dir = std::filesystem::temp_directory_path() / "drom_cli_tests";

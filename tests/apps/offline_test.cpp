@@ -3,6 +3,8 @@
 #include "fem/residual_stress.hpp"
 #include "support/hdf5_reader.hpp"
 
+#include "drom_process.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -12,19 +14,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sys/wait.h>
 
 namespace {
 
+// "" on success, otherwise the exit code and what drom said.
 std::string run(const std::string& args) {
-  const std::string cmd = std::string(DROM_BINARY) + " " + args + " --quiet 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), buf.size(), pipe)) out += buf.data();
-  const int status = pclose(pipe);
-  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return code == 0 ? "" : "exit " + std::to_string(code) + ": " + out;
+  const DromResult r = run_drom(args + " --quiet");
+  return r.exit_code == 0 ? "" : "exit " + std::to_string(r.exit_code) + ": " + r.output;
 }
 
 std::filesystem::path dir(const std::string& name) {

@@ -1,0 +1,41 @@
+#pragma once
+// A case's machining, ready to step through station by station: its tool, toolpath, timeline and
+// stations, and the removal level set with the mesh's element samples.
+#include "apps/case_setup.hpp"
+#include "levelset/material_removal.hpp"
+#include "levelset/toolpath.hpp"
+
+#include <memory>
+#include <vector>
+
+namespace drom::app {
+
+class MachiningRun {
+ public:
+  // Throws InputError when the toolpath has no cutting move.
+  MachiningRun(const Case& c, const PartModel& part);
+
+  const levelset::Toolpath& path() const { return path_; }
+  const levelset::PathTimeline& timeline() const { return *timeline_; }
+  const std::vector<levelset::Station>& stations() const { return stations_; }
+  double voxel_size() const { return voxel_; }
+  const levelset::MaterialRemoval& removal() const { return *removal_; }
+
+  // Sweeps the next station (in order) and updates the elements it touched in `remaining`
+  // (one volume fraction per element, 1 = intact). Returns the volume this station removed.
+  double advance(std::vector<double>& remaining);
+  std::size_t next_station() const { return next_; }
+
+ private:
+  levelset::Toolpath path_;
+  std::unique_ptr<levelset::PathTimeline> timeline_;  // refers to path_
+  std::vector<levelset::Station> stations_;
+  double voxel_ = 0;
+  std::unique_ptr<levelset::MaterialRemoval> removal_;
+  levelset::ElementSamples samples_;
+  levelset::RemovalCriterion criterion_;
+  std::size_t next_ = 0;
+  double swept_to_ = 0;  // path length swept so far
+};
+
+}  // namespace drom::app
