@@ -16,6 +16,7 @@ struct CommandOptions {
   bool resume = false;   // continue an interrupted run in --out
   int stop_after = -1;   // solve at most this many stations in this invocation, then stop (batch, tests)
   int threads = 0;       // 0: one per hardware thread
+  int frames = -1;       // full-field VTK frames; -1: 10 for truth, none for offline
 };
 
 int run_command(const CommandOptions& options);    // drom run

@@ -37,6 +37,8 @@ int main(int argc, char** argv) {
       cmd->add_flag("--resume", options.resume, "continue the interrupted run in --out (refuses a different case)");
       cmd->add_option("--stop-after", options.stop_after, "solve at most N stations in this invocation, then stop (resume later)")->check(CLI::NonNegativeNumber);
       cmd->add_option("--threads", options.threads, "worker threads (default: one per hardware thread)")->check(CLI::PositiveNumber);
+      cmd->add_option("--frames", options.frames, "full-field VTK frames over the stations (default: 10 for truth, 0 for offline)")
+          ->check(CLI::NonNegativeNumber);
     }
     commands.emplace_back(cmd, &sub);
   }

@@ -43,16 +43,21 @@ std::string Hdf5Reader::text_attribute(const std::string& name) const {
   if (H5Aexists(handle_, name.c_str()) <= 0) throw InputError(path_.string() + ": attribute '" + name + "' is missing");
   const hid_t attr = H5Aopen(handle_, name.c_str(), H5P_DEFAULT);
   const hid_t type = H5Aget_type(attr);
-  const std::size_t size = H5Tget_size(type);
-  std::string value(size, '\0');
-  const hid_t memtype = H5Tcopy(H5T_C_S1);
-  H5Tset_size(memtype, size);
-  const herr_t status = H5Aread(attr, memtype, value.data());
-  H5Tclose(memtype);
+  std::string value;
+  herr_t status = -1;
+  if (H5Tget_class(type) == H5T_STRING && H5Tis_variable_str(type) > 0) {
+    char* text = nullptr;
+    status = H5Aread(attr, type, &text);
+    if (status >= 0 && text) value = text;
+    if (text) H5free_memory(text);
+  } else if (H5Tget_class(type) == H5T_STRING) {
+    value.assign(H5Tget_size(type), '\0');
+    status = H5Aread(attr, type, value.data());
+    value.resize(value.find('\0') == std::string::npos ? value.size() : value.find('\0'));
+  }
   H5Tclose(type);
   H5Aclose(attr);
   if (status < 0) throw InputError(path_.string() + ": attribute '" + name + "' is not text");
-  value.resize(value.find('\0') == std::string::npos ? value.size() : value.find('\0'));
   return value;
 }
 

@@ -52,12 +52,14 @@ void Hdf5Writer::write(const std::string& name, const std::vector<float>& data, 
 }
 
 void Hdf5Writer::attribute(const std::string& name, const std::string& value) {
+  // Variable-length UTF-8: h5py reads it back as a Python str, not bytes.
   const hid_t type = H5Tcopy(H5T_C_S1);
-  H5Tset_size(type, std::max<std::size_t>(1, value.size()));
-  H5Tset_strpad(type, H5T_STR_NULLTERM);
+  H5Tset_size(type, H5T_VARIABLE);
+  H5Tset_cset(type, H5T_CSET_UTF8);
   const hid_t space = H5Screate(H5S_SCALAR);
   const hid_t attr = H5Acreate2(handle_, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT);
-  check(H5Awrite(attr, type, value.c_str()), "attribute " + name);
+  const char* text = value.c_str();
+  check(H5Awrite(attr, type, &text), "attribute " + name);
   H5Aclose(attr);
   H5Sclose(space);
   H5Tclose(type);

@@ -92,14 +92,28 @@ std::string station_name(std::size_t k) {
   return buf;
 }
 
-void write_field(const std::filesystem::path& path, const fem::ElasticProblem& problem, const Eigen::VectorXd& u) {
-  const auto stresses = problem.element_stresses(0, u);
+// Truth: its displacement, stress and von Mises. Offline: one displacement per unit profile
+// (`displacement_P2_11` = unit sigma11 coefficient of P2), with the stress of the first.
+void write_field(const std::filesystem::path& path, const fem::ElasticProblem& problem, const Eigen::MatrixXd& U, bool truth) {
+  const auto stresses = problem.element_stresses(0, U.col(0));
   std::vector<double> vm(stresses.size());
   for (std::size_t e = 0; e < stresses.size(); ++e) vm[e] = fem::von_mises(stresses[e]);
   std::vector<char> keep(problem.activity().size());
   for (std::size_t e = 0; e < keep.size(); ++e) keep[e] = problem.activity()[e] > 0;
   fem::VtuFields fields;
-  fields.point_vectors = {{"displacement", u}};
+  if (truth) {
+    fields.point_vectors = {{"displacement", U.col(0)}};
+  } else {
+    for (Eigen::Index p = 0; p < U.cols(); ++p) {
+      const auto& prof = problem.profiles()[static_cast<std::size_t>(p)];
+      std::string name = "displacement";
+      for (std::size_t j = 0; j < prof.degrees.size(); ++j) {
+        if (prof.sigma11[j] != 0) name += "_P" + std::to_string(prof.degrees[j]) + "_11";
+        if (prof.sigma22[j] != 0) name += "_P" + std::to_string(prof.degrees[j]) + "_22";
+      }
+      fields.point_vectors.emplace_back(name, U.col(p));
+    }
+  }
   fields.cell_scalars = {{"von_mises", vm}, {"activity", problem.activity()}};
   fields.cell_tensors = {{"stress", stresses}};
   fem::write_vtu(path, problem.mesh(), fields, keep);
@@ -154,7 +168,8 @@ int simulate(const CommandOptions& options, bool truth) {
     using SetThreads = void (*)(int);
     if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(1);
   }
-  const std::size_t frames = truth ? static_cast<std::size_t>(std::max(1, std::min<int>(c.frames, static_cast<int>(ns)))) : 0;
+  const int wanted_frames = options.frames >= 0 ? options.frames : (truth ? 10 : 0);
+  const std::size_t frames = static_cast<std::size_t>(std::min<int>(wanted_frames, static_cast<int>(ns)));
   auto is_frame = [&](std::size_t k) { return frames > 0 && ((k + 1) * frames / ns != k * frames / ns || k + 1 == ns); };
   std::atomic<std::size_t> next{0};
   std::atomic<int> solved{0};
@@ -176,7 +191,7 @@ int simulate(const CommandOptions& options, bool truth) {
         const Eigen::MatrixXd U = problem.solve();
         Eigen::MatrixXd W(static_cast<Eigen::Index>(target.size()), P);
         for (std::size_t i = 0; i < target.size(); ++i) W.row(static_cast<Eigen::Index>(i)) = U.row(3 * target[i] + 2);
-        if (is_frame(k)) write_field(options.out / "frames" / (station_name(k) + ".vtu"), problem, U.col(0));
+        if (is_frame(k)) write_field(options.out / "frames" / (station_name(k) + ".vtu"), problem, U, truth);
         checkpoint.save(station_name(k), W);
         std::lock_guard<std::mutex> lock(report);
         const auto done = static_cast<double>(++done_before);
@@ -227,7 +242,7 @@ int simulate(const CommandOptions& options, bool truth) {
         if (problem.orphan_dofs()[static_cast<std::size_t>(d)]) u[d] = 0;
       U.col(p) = u;
     }
-    if (truth) write_field(options.out / "final_free_shape.vtu", problem, U.col(0));
+    write_field(options.out / "final_free_shape.vtu", problem, U, truth);
     checkpoint.save("final", U);
   }
 
@@ -296,11 +311,11 @@ int simulate(const CommandOptions& options, bool truth) {
                                        "B2[3 * node + component, profile] = free final shape after best-fit alignment"));
     h5.commit();
   }
-  if (truth) {
+  if (frames > 0) {
     fem::PvdCollection pvd;
     for (std::size_t k = 0; k < ns; ++k)
       if (is_frame(k)) pvd.add(time[k], std::filesystem::path("frames") / (station_name(k) + ".vtu"));
-    pvd.write(options.out / "truth.pvd");
+    pvd.write(options.out / (mode + ".pvd"));
   }
   checkpoint.remove();
 
@@ -324,7 +339,9 @@ int simulate(const CommandOptions& options, bool truth) {
                               {"case_hash", hex(case_hash)},
                               {"content_hash", hex(content)},
                               {"machine", machine_info()},
-                              {"files", truth ? nlohmann::json{"database.h5", "truth.pvd", "frames/", "final_free_shape.vtu"} : nlohmann::json{"database.h5"}}});
+                              {"frames", frames},
+                              {"files", frames > 0 ? nlohmann::json{"database.h5", mode + ".pvd", "frames/", "final_free_shape.vtu"}
+                                                   : nlohmann::json{"database.h5", "final_free_shape.vtu"}}});
   if (!options.quiet)
     std::printf("drom %s: %s: %zu stations x %lld profile(s), %d unknowns, %.1f s (%.2f s per station on %d threads) -> %s/database.h5 (%.1f MB)\n",
                 mode.c_str(), c.name.c_str(), ns, static_cast<long long>(P), mesh.dof_count(), elapsed(), (elapsed() - removal_seconds) / static_cast<double>(ns),

@@ -31,10 +31,10 @@ std::filesystem::path dir(const std::string& name) {
 
 // Coarse flat plate: 100 mm elements, a station every 300 mm of cut, 1 mm voxels.
 const std::string kPlate =
-    " --set mesh.nx=10 --set mesh.ny=10 --set path.station_spacing=300 --set removal.voxel_size=1.0 --set removal.frames=2"
+    " --set mesh.nx=10 --set mesh.ny=10 --set path.station_spacing=300 --set removal.voxel_size=1.0"
     " --set clamps.0.box=[0,100,0,100] --set clamps.1.box=[900,1000,0,100] --set clamps.2.box=[0,100,900,1000] --set clamps.3.box=[900,1000,900,1000]";
 const std::string kPanel = std::string(DROM_SOURCE_DIR) + "/cases/curved_panel.toml --set mesh.nx=12 --set mesh.ny=12 --set path.station_spacing=150"
-                                                          " --set removal.voxel_size=0.5 --set removal.frames=2";
+                                                          " --set removal.voxel_size=0.5";
 
 Eigen::MatrixXd as_matrix(const drom::Hdf5Matrix& m) {
   Eigen::MatrixXd r(static_cast<Eigen::Index>(m.rows), static_cast<Eigen::Index>(m.cols));
@@ -49,7 +49,7 @@ double relative(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) { return (a 
 
 TEST(Offline, TruthEqualsSuperposedUnitResponses) {
   const auto off = dir("super_offline"), tru = dir("super_truth");
-  ASSERT_EQ(run("offline" + kPlate + " --out " + off.string()), "");
+  ASSERT_EQ(run("offline" + kPlate + " --frames 2 --out " + off.string()), "");
   ASSERT_EQ(run("truth" + kPlate + " --out " + tru.string()), "");
   drom::Hdf5Reader db(off / "database.h5"), truth(tru / "database.h5");
   EXPECT_EQ(db.text_attribute("kind"), "offline");
@@ -67,6 +67,8 @@ TEST(Offline, TruthEqualsSuperposedUnitResponses) {
   EXPECT_TRUE(std::filesystem::exists(tru / "truth.pvd"));
   EXPECT_TRUE(std::filesystem::exists(tru / "final_free_shape.vtu"));
   EXPECT_FALSE(std::filesystem::exists(off / ".checkpoint"));
+  EXPECT_TRUE(std::filesystem::exists(off / "offline.pvd"));  // --frames 2: unit-profile fields at two stations
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(off / "frames"), std::filesystem::directory_iterator{}), 2);
 }
 
 TEST(Offline, ResumedRunWritesTheSameDatabase) {
