@@ -1,5 +1,7 @@
 #include "fem/vtk_output.hpp"
 
+#include "fem/elastic_problem.hpp"
+
 #include "support/atomic_file.hpp"
 #include "support/vtk_xml.hpp"
 
@@ -77,6 +79,20 @@ void write_vtu(const std::filesystem::path& path, const Mesh& mesh, const VtuFie
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
   writer->SetInputData(grid);
   write_vtk_xml(*writer, path);
+}
+
+void write_solution_vtu(const std::filesystem::path& path, const ElasticProblem& problem,
+                        const std::vector<std::pair<std::string, Eigen::VectorXd>>& displacements) {
+  const auto stresses = problem.element_stresses(0, displacements.front().second);
+  std::vector<double> vm(stresses.size());
+  for (std::size_t e = 0; e < stresses.size(); ++e) vm[e] = von_mises(stresses[e]);
+  std::vector<char> keep(problem.activity().size());
+  for (std::size_t e = 0; e < keep.size(); ++e) keep[e] = problem.activity()[e] > 0;
+  VtuFields fields;
+  fields.point_vectors = displacements;
+  fields.cell_scalars = {{"von_mises", vm}, {"activity", problem.activity()}};
+  fields.cell_tensors = {{"stress", stresses}};
+  write_vtu(path, problem.mesh(), fields, keep);
 }
 
 void PvdCollection::write(const std::filesystem::path& path) const {

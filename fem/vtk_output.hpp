@@ -22,11 +22,20 @@ struct VtuFields {
 // Writes the elements whose `keep` flag is set (empty: all) with their fields; atomic.
 void write_vtu(const std::filesystem::path& path, const Mesh& mesh, const VtuFields& fields, const std::vector<char>& keep = {});
 
+class ElasticProblem;
+
+// The problem's current state: the cells that still hold material, the named displacement fields,
+// and the element-average total stress, von Mises stress and activity for profile 0 under the
+// first displacement. Call it right after the solve, while the activity is that state's.
+void write_solution_vtu(const std::filesystem::path& path, const ElasticProblem& problem,
+                        const std::vector<std::pair<std::string, Eigen::VectorXd>>& displacements);
+
 // A .pvd collection: ParaView opens it as one time series.
 class PvdCollection {
  public:
   void add(double time, const std::filesystem::path& vtu_relative_path) { entries_.emplace_back(time, vtu_relative_path); }
   void write(const std::filesystem::path& path) const;
+  std::size_t size() const { return entries_.size(); }
 
  private:
   std::vector<std::pair<double, std::filesystem::path>> entries_;

@@ -92,31 +92,21 @@ std::string station_name(std::size_t k) {
   return buf;
 }
 
-// Truth: its displacement, stress and von Mises. Offline: one displacement per unit profile
-// (`displacement_P2_11` = unit sigma11 coefficient of P2), with the stress of the first.
+// Truth: its displacement. Offline: one displacement per unit profile (`displacement_P2_11` = unit
+// sigma11 coefficient of P2); the stress shown is the first column's.
 void write_field(const std::filesystem::path& path, const fem::ElasticProblem& problem, const Eigen::MatrixXd& U, bool truth) {
-  const auto stresses = problem.element_stresses(0, U.col(0));
-  std::vector<double> vm(stresses.size());
-  for (std::size_t e = 0; e < stresses.size(); ++e) vm[e] = fem::von_mises(stresses[e]);
-  std::vector<char> keep(problem.activity().size());
-  for (std::size_t e = 0; e < keep.size(); ++e) keep[e] = problem.activity()[e] > 0;
-  fem::VtuFields fields;
-  if (truth) {
-    fields.point_vectors = {{"displacement", U.col(0)}};
-  } else {
-    for (Eigen::Index p = 0; p < U.cols(); ++p) {
-      const auto& prof = problem.profiles()[static_cast<std::size_t>(p)];
-      std::string name = "displacement";
-      for (std::size_t j = 0; j < prof.degrees.size(); ++j) {
-        if (prof.sigma11[j] != 0) name += "_P" + std::to_string(prof.degrees[j]) + "_11";
-        if (prof.sigma22[j] != 0) name += "_P" + std::to_string(prof.degrees[j]) + "_22";
-      }
-      fields.point_vectors.emplace_back(name, U.col(p));
+  std::vector<std::pair<std::string, Eigen::VectorXd>> displacements;
+  if (truth) displacements.emplace_back("displacement", U.col(0));
+  for (Eigen::Index p = 0; !truth && p < U.cols(); ++p) {
+    const auto& prof = problem.profiles()[static_cast<std::size_t>(p)];
+    std::string name = "displacement";
+    for (std::size_t j = 0; j < prof.degrees.size(); ++j) {
+      if (prof.sigma11[j] != 0) name += "_P" + std::to_string(prof.degrees[j]) + "_11";
+      if (prof.sigma22[j] != 0) name += "_P" + std::to_string(prof.degrees[j]) + "_22";
     }
+    displacements.emplace_back(name, U.col(p));
   }
-  fields.cell_scalars = {{"von_mises", vm}, {"activity", problem.activity()}};
-  fields.cell_tensors = {{"stress", stresses}};
-  fem::write_vtu(path, problem.mesh(), fields, keep);
+  fem::write_solution_vtu(path, problem, displacements);
 }
 
 int simulate(const CommandOptions& options, bool truth) {

@@ -35,29 +35,13 @@ class Steps {
   std::chrono::steady_clock::time_point start_;
 };
 
-struct State {
-  std::string name;
-  Eigen::VectorXd u;
-  std::vector<char> live_cells;
-};
-
-void write_state(const std::filesystem::path& out, const fem::ElasticProblem& problem, const State& s, fem::PvdCollection& pvd, double time) {
-  const auto stresses = problem.element_stresses(0, s.u);
-  std::vector<double> vm(stresses.size());
-  for (std::size_t e = 0; e < stresses.size(); ++e) vm[e] = fem::von_mises(stresses[e]);
-  fem::VtuFields fields;
-  fields.point_vectors = {{"displacement", s.u}};
-  fields.cell_scalars = {{"von_mises", vm}, {"activity", problem.activity()}};
-  fields.cell_tensors = {{"stress", stresses}};
-  const std::string file = "run_" + s.name + ".vtu";
-  fem::write_vtu(out / file, problem.mesh(), fields, s.live_cells);
-  pvd.add(time, file);
-}
-
-std::vector<char> live_cells(const fem::ElasticProblem& problem) {
-  std::vector<char> live(problem.activity().size());
-  for (std::size_t e = 0; e < live.size(); ++e) live[e] = problem.activity()[e] > 0;
-  return live;
+// Writes the problem's state right after its solve (the activity must be that state's).
+Eigen::VectorXd record(const std::filesystem::path& out, const fem::ElasticProblem& problem, const std::string& name, Eigen::VectorXd u,
+                       fem::PvdCollection& pvd) {
+  const std::string file = "run_" + name + ".vtu";
+  fem::write_solution_vtu(out / file, problem, {{"displacement", u}});
+  pvd.add(static_cast<double>(pvd.size()), file);
+  return u;
 }
 
 }  // namespace
@@ -78,33 +62,32 @@ int run_command(const CommandOptions& options) {
   const std::vector<char> all_nodes(static_cast<std::size_t>(mesh.node_count()), 1);
   problem.equilibrate(fem::isostatic_dofs(mesh, part.shape, all_nodes));
 
+  fem::PvdCollection pvd;
   steps.begin("solving the intact stock, clamped");
   problem.set_fixed_dofs(clamped);
   problem.assemble_and_factorize();
-  State intact{"0_intact", problem.solve().col(0), live_cells(problem)};
+  const Eigen::VectorXd intact = record(options.out, problem, "0_intact", problem.solve().col(0), pvd);
 
   steps.begin("thinning the stock by the pocket depth everywhere, clamped");
   const auto criterion = c.removal_criterion == "centroid" ? fem::RemovalCriterion::Centroid : fem::RemovalCriterion::VolumeFraction;
   problem.set_activity(fem::layer_activity(mesh, part.shape, c.pocket_depth, criterion));
   problem.assemble_and_factorize();
-  State thinned{"1_thinned_clamped", problem.solve().col(0), live_cells(problem)};
+  const Eigen::VectorXd thinned = record(options.out, problem, "1_thinned_clamped", problem.solve().col(0), pvd);
 
   steps.begin("unclamping the thinned stock (3-2-1 supports, best-fit alignment)");
   const auto live_nodes = problem.live_nodes();
   problem.set_fixed_dofs(fem::isostatic_dofs(mesh, part.shape, live_nodes));
   problem.assemble_and_factorize();
-  State free_state{"2_thinned_free", problem.solve().col(0), live_cells(problem)};
+  Eigen::VectorXd aligned = problem.solve().col(0);
   std::vector<int> live_list;
   for (int n = 0; n < mesh.node_count(); ++n)
     if (live_nodes[static_cast<std::size_t>(n)]) live_list.push_back(n);
-  fem::remove_rigid_motion(mesh, live_list, free_state.u);
+  fem::remove_rigid_motion(mesh, live_list, aligned);
   for (int d = 0; d < mesh.dof_count(); ++d)
-    if (problem.orphan_dofs()[static_cast<std::size_t>(d)]) free_state.u[d] = 0;
+    if (problem.orphan_dofs()[static_cast<std::size_t>(d)]) aligned[d] = 0;
+  const Eigen::VectorXd free_shape = record(options.out, problem, "2_thinned_free", aligned, pvd);
 
-  steps.begin("writing VTK and summary.json");
-  fem::PvdCollection pvd;
-  double t = 0;
-  for (const State* s : {&intact, &thinned, &free_state}) write_state(options.out, problem, *s, pvd, t++);
+  steps.begin("writing summary.json");
   pvd.write(options.out / "run.pvd");
 
   auto max_vertical = [](const Eigen::VectorXd& u) {
@@ -119,9 +102,9 @@ int run_command(const CommandOptions& options) {
       {"case_origin", c.origin},
       {"mesh", {{"element", fem::element_name(mesh.type)}, {"elements", mesh.element_count()}, {"unknowns", mesh.dof_count()}}},
       {"equilibrium_residual_relative", problem.equilibrium_residual()},
-      {"intact_clamped_max_displacement_mm", intact.u.cwiseAbs().maxCoeff()},
-      {"thinned_clamped_max_vertical_displacement_mm", max_vertical(thinned.u)},
-      {"thinned_free_max_vertical_displacement_mm", max_vertical(free_state.u)},
+      {"intact_clamped_max_displacement_mm", intact.cwiseAbs().maxCoeff()},
+      {"thinned_clamped_max_vertical_displacement_mm", max_vertical(thinned)},
+      {"thinned_free_max_vertical_displacement_mm", max_vertical(free_shape)},
       {"timing_s",
        {{"total", steps.elapsed()},
         {"assembly", problem.assembly_seconds()},
@@ -139,7 +122,7 @@ int run_command(const CommandOptions& options) {
     const auto centre = fem::nodes_where(mesh, [&](const Eigen::Vector3d& p) {
       return p.z() < 1e-9 && std::abs(p.x() - c.length_x / 2) < 0.2 * c.length_x && std::abs(p.y() - c.length_y / 2) < 0.2 * c.length_y;
     });
-    const Eigen::Vector2d fe = fem::fit_plate_curvature(mesh, centre, free_state.u);
+    const Eigen::Vector2d fe = fem::fit_plate_curvature(mesh, centre, free_shape);
     const auto exact = fem::layer_removal_closed_form(part.profile, c.thickness, c.pocket_depth, c.young_modulus, c.poisson_ratio);
     const double err = (fe - exact.curvature).cwiseAbs().maxCoeff() / exact.curvature.cwiseAbs().maxCoeff();
     summary["free_plate_curvature_per_mm"] = {{"fe", {fe.x(), fe.y()}}, {"closed_form", {exact.curvature.x(), exact.curvature.y()}}, {"relative_error", err}};
@@ -151,10 +134,10 @@ int run_command(const CommandOptions& options) {
 
   if (!options.quiet) {
     std::printf("drom run: %s (%d %s elements, %d unknowns)\n", c.name.c_str(), mesh.element_count(), fem::element_name(mesh.type), mesh.dof_count());
-    std::printf("  intact stock, clamped: max |u|          %.2e mm (equilibrium residual %.1e)\n", intact.u.cwiseAbs().maxCoeff(),
+    std::printf("  intact stock, clamped: max |u|          %.2e mm (equilibrium residual %.1e)\n", intact.cwiseAbs().maxCoeff(),
                 problem.equilibrium_residual());
-    std::printf("  thinned by %.3g mm, clamped: max |w|     %.4f mm\n", c.pocket_depth, max_vertical(thinned.u));
-    std::printf("  thinned, unclamped (best fit): max |w|  %.4f mm\n", max_vertical(free_state.u));
+    std::printf("  thinned by %.3g mm, clamped: max |w|     %.4f mm\n", c.pocket_depth, max_vertical(thinned));
+    std::printf("  thinned, unclamped (best fit): max |w|  %.4f mm\n", max_vertical(free_shape));
     std::fputs(table.c_str(), stdout);
     std::printf("  outputs: %s/run.pvd (open in ParaView), summary.json; %.1f s\n", options.out.string().c_str(), steps.elapsed());
   }

@@ -3,6 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
+#include <vtkNew.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
 #include <nlohmann/json.hpp>
 
 #include <array>
@@ -102,6 +109,20 @@ TEST(Cli, RunWritesVtkAndSummaryOnACoarsePlate) {
   EXPECT_LT(s["intact_clamped_max_displacement_mm"].get<double>(), 1e-9);
   EXPECT_LT(s["free_plate_curvature_per_mm"]["relative_error"].get<double>(), 0.01);
   EXPECT_GT(s["thinned_clamped_max_vertical_displacement_mm"].get<double>(), 0.1);
+  // Each file shows its own state: the intact stock is whole, the thinned one has lost cells.
+  auto read = [&](const char* name) {
+    vtkNew<vtkXMLUnstructuredGridReader> reader;
+    reader->SetFileName((out / name).c_str());
+    reader->Update();
+    vtkSmartPointer<vtkUnstructuredGrid> grid = reader->GetOutput();
+    return grid;
+  };
+  const auto intact = read("run_0_intact.vtu"), thinned = read("run_1_thinned_clamped.vtu");
+  double range[2];
+  intact->GetCellData()->GetArray("activity")->GetRange(range);
+  EXPECT_EQ(range[0], 1.0);
+  EXPECT_EQ(intact->GetNumberOfCells(), 10 * 10 * 5);
+  EXPECT_LT(thinned->GetNumberOfCells(), intact->GetNumberOfCells());
 }
 
 TEST(Cli, RemovalOnAnStlPartWritesItsOutputs) {
