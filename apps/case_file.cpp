@@ -36,9 +36,9 @@ void read_part(CaseReader& r, Case& c) {
 }
 
 void read_mesh(CaseReader& r, Case& c) {
-  c.element = r.choice("mesh.element", {"hex20", "tet10"}, c.shape == "stl" ? "tet10" : "hex20");
-  if (c.element == "hex20") {
-    if (c.shape == "stl") r.fail("mesh.element", "hex20 meshes are structured: STL parts need \"tet10\"");
+  c.element = r.choice("mesh.element", {"hex20", "hex27", "tet10"}, c.shape == "stl" ? "tet10" : "hex20");
+  if (c.element != "tet10") {
+    if (c.shape == "stl") r.fail("mesh.element", c.element + " meshes are structured: STL parts need \"tet10\"");
     c.nx = static_cast<int>(r.integer("mesh.nx", 1, 2000));
     c.ny = static_cast<int>(r.integer("mesh.ny", 1, 2000));
     c.nz = static_cast<int>(r.integer("mesh.nz", 1, 200));

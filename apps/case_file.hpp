@@ -29,7 +29,7 @@ struct Case {
   double young_modulus = 0, poisson_ratio = 0;
 
   // [mesh]
-  std::string element;  // hex20, tet10
+  std::string element;  // hex20, hex27, tet10
   int nx = 0, ny = 0, nz = 0;
   double thickness_grading = 1;
   double tet_max_volume = 0, tet_radius_edge_ratio = 1.4;

@@ -33,8 +33,9 @@ PartModel build_part(const Case& c) {
   } else {
     part.shape = c.shape == "panel" ? fem::PartShape::panel(c.length_x, c.length_y, c.thickness, c.outer_radius)
                                     : fem::PartShape::plate(c.length_x, c.length_y, c.thickness);
-    if (c.element == "hex20") {
-      part.mesh = fem::make_structured_hex_mesh(part.shape, {c.nx, c.ny, c.nz, c.thickness_grading});
+    if (c.element != "tet10") {
+      part.mesh = fem::make_structured_hex_mesh(part.shape, {c.nx, c.ny, c.nz, c.thickness_grading,
+                                                             c.element == "hex27" ? fem::ElementType::Hex27 : fem::ElementType::Hex20});
     } else {
       if (c.shape == "panel") throw InputError(c.origin + ": mesh.element: tet10 meshes of panels need an STL of the panel (part.shape = \"stl\")");
       part.mesh = fem::make_tet_mesh(fem::layered_box_plc({0, 0, 0}, {c.length_x, c.length_y, c.thickness}, {c.thickness - c.pocket_depth}),

@@ -31,7 +31,7 @@ double von_mises(const Vector6d& s) {
 }
 
 ElementOperators::ElementOperators(const Mesh& mesh, const Material& material)
-    : mesh_(mesh), C_(material.elasticity()), stiffness_rule_(quadrature_rule(mesh.type, mesh.type == ElementType::Hex20 ? 4 : 2)) {}
+    : mesh_(mesh), C_(material.elasticity()), stiffness_rule_(quadrature_rule(mesh.type, is_hex(mesh.type) ? 4 : 2)) {}
 
 void ElementOperators::strain_matrix(const Eigen::MatrixX3d& dNdx, Eigen::MatrixXd& B) {
   const auto n = dNdx.rows();

@@ -42,7 +42,7 @@ levelset::ElementSamples element_samples(const Mesh& mesh, double spacing) {
     samples.centroid[k] = mesh.centroid(e);
     samples.bounds[k] = Eigen::AlignedBox3d(X.rowwise().minCoeff(), X.rowwise().maxCoeff());
     std::vector<QuadraturePoint> rule;
-    if (mesh.type == ElementType::Hex20) {
+    if (is_hex(mesh.type)) {
       // Extent along each reference direction from the Jacobian at the centre.
       shape_functions(mesh.type, Eigen::Vector3d::Zero(), N, dN);
       const Eigen::Matrix3d J = X * dN;

@@ -11,7 +11,7 @@ namespace drom::fem {
 std::vector<double> layer_activity(const Mesh& mesh, const PartShape& shape, double depth, RemovalCriterion criterion) {
   const double floor_t = shape.thickness() - depth;
   std::vector<double> activity(static_cast<std::size_t>(mesh.element_count()), 1.0);
-  const auto rule = mesh.type == ElementType::Hex20 ? hex_gauss_rule(6) : tet_rule(10);
+  const auto rule = is_hex(mesh.type) ? hex_gauss_rule(6) : tet_rule(10);
   Eigen::VectorXd N;
   Eigen::MatrixX3d dN;
   for (int e = 0; e < mesh.element_count(); ++e) {

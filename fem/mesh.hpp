@@ -1,6 +1,6 @@
 #pragma once
 // A volume mesh of quadratic elements. Node ordering inside an element follows VTK's
-// (VTK_QUADRATIC_HEXAHEDRON, VTK_QUADRATIC_TETRA) so meshes go to ParaView unchanged.
+// (VTK_QUADRATIC_HEXAHEDRON, VTK_TRIQUADRATIC_HEXAHEDRON, VTK_QUADRATIC_TETRA) so meshes go to ParaView unchanged.
 #include "levelset/part_shape.hpp"
 
 #include <Eigen/Core>
@@ -13,7 +13,9 @@ namespace drom::fem {
 // The stock's geometry is described upstream, where material removal is computed.
 using levelset::PartShape;
 
-enum class ElementType { Hex20, Tet10 };
+enum class ElementType { Hex20, Hex27, Tet10 };
+// Hexahedra of either kind (serendipity Hex20, or the tensor-product Lagrange Hex27).
+inline bool is_hex(ElementType type) { return type != ElementType::Tet10; }
 
 int nodes_per_element(ElementType type);
 const char* element_name(ElementType type);

@@ -13,12 +13,16 @@ namespace {
 const std::vector<std::vector<int>> kHexFaces = {{0, 3, 2, 1, 11, 10, 9, 8},     {4, 5, 6, 7, 12, 13, 14, 15},
                                                  {0, 1, 5, 4, 8, 17, 12, 16},    {1, 2, 6, 5, 9, 18, 13, 17},
                                                  {2, 3, 7, 6, 10, 19, 14, 18},   {3, 0, 4, 7, 11, 16, 15, 19}};
+// Hex27 faces add their centre node.
+const std::vector<std::vector<int>> kHex27Faces = {{0, 3, 2, 1, 11, 10, 9, 8, 24},   {4, 5, 6, 7, 12, 13, 14, 15, 25},
+                                                   {0, 1, 5, 4, 8, 17, 12, 16, 22},  {1, 2, 6, 5, 9, 18, 13, 17, 21},
+                                                   {2, 3, 7, 6, 10, 19, 14, 18, 23}, {3, 0, 4, 7, 11, 16, 15, 19, 20}};
 const std::vector<std::vector<int>> kTetFaces = {{0, 2, 1, 6, 5, 4}, {0, 1, 3, 4, 8, 7}, {1, 2, 3, 5, 9, 8}, {0, 3, 2, 7, 9, 6}};
 }  // namespace
 
 std::vector<BoundaryFace> boundary_faces(const Mesh& mesh) {
-  const auto& local = mesh.type == ElementType::Hex20 ? kHexFaces : kTetFaces;
-  const int corners = mesh.type == ElementType::Hex20 ? 4 : 3;
+  const auto& local = mesh.type == ElementType::Hex20 ? kHexFaces : mesh.type == ElementType::Hex27 ? kHex27Faces : kTetFaces;
+  const int corners = is_hex(mesh.type) ? 4 : 3;
   std::map<std::vector<int>, std::pair<int, int>> seen;  // sorted corners -> (element, local face); element -1 once shared
   for (int e = 0; e < mesh.element_count(); ++e) {
     const auto conn = mesh.element(e);

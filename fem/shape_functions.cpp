@@ -7,8 +7,22 @@
 
 namespace drom::fem {
 
-int nodes_per_element(ElementType type) { return type == ElementType::Hex20 ? 20 : 10; }
-const char* element_name(ElementType type) { return type == ElementType::Hex20 ? "hex20" : "tet10"; }
+int nodes_per_element(ElementType type) {
+  switch (type) {
+    case ElementType::Hex20: return 20;
+    case ElementType::Hex27: return 27;
+    case ElementType::Tet10: break;
+  }
+  return 10;
+}
+const char* element_name(ElementType type) {
+  switch (type) {
+    case ElementType::Hex20: return "hex20";
+    case ElementType::Hex27: return "hex27";
+    case ElementType::Tet10: break;
+  }
+  return "tet10";
+}
 
 void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w) {
   if (n < 1 || n > 16) throw std::invalid_argument("gauss_legendre: 1..16 points");
@@ -39,11 +53,30 @@ void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w) {
 
 namespace {
 
-// Hex20 reference corners in VTK order, then edge midpoints in VTK order.
-const double kHexRef[20][3] = {
+// Hex reference nodes in VTK order: corners, edge midpoints (Hex20 stops here), then the face
+// centres (-x, +x, -y, +y, -z, +z, as vtkTriQuadraticHexahedron's parametric coordinates give them)
+// and the body centre.
+const double kHexRef[27][3] = {
     {-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1}, {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1},
     {0, -1, -1},  {1, 0, -1},  {0, 1, -1}, {-1, 0, -1}, {0, -1, 1},  {1, 0, 1},  {0, 1, 1}, {-1, 0, 1},
-    {-1, -1, 0},  {1, -1, 0},  {1, 1, 0},  {-1, 1, 0}};
+    {-1, -1, 0},  {1, -1, 0},  {1, 1, 0},  {-1, 1, 0},  {-1, 0, 0},  {1, 0, 0},  {0, -1, 0}, {0, 1, 0},
+    {0, 0, -1},   {0, 0, 1},   {0, 0, 0}};
+
+// 1D quadratic Lagrange polynomial with node at c in {-1, 0, 1}, and its derivative.
+double lagrange2(double c, double x) { return c == 0 ? 1 - x * x : 0.5 * x * (x + c); }
+double lagrange2_derivative(double c, double x) { return c == 0 ? -2 * x : x + 0.5 * c; }
+
+void hex27(const Eigen::Vector3d& p, Eigen::VectorXd& N, Eigen::MatrixX3d& dN) {
+  N.resize(27);
+  dN.resize(27, 3);
+  for (int a = 0; a < 27; ++a) {
+    const double lx = lagrange2(kHexRef[a][0], p[0]), ly = lagrange2(kHexRef[a][1], p[1]), lz = lagrange2(kHexRef[a][2], p[2]);
+    N[a] = lx * ly * lz;
+    dN(a, 0) = lagrange2_derivative(kHexRef[a][0], p[0]) * ly * lz;
+    dN(a, 1) = lx * lagrange2_derivative(kHexRef[a][1], p[1]) * lz;
+    dN(a, 2) = lx * ly * lagrange2_derivative(kHexRef[a][2], p[2]);
+  }
+}
 
 const double kTetRef[10][3] = {{0, 0, 0},   {1, 0, 0},   {0, 1, 0},   {0, 0, 1},   {.5, 0, 0},
                                {.5, .5, 0}, {0, .5, 0},  {0, 0, .5},  {.5, 0, .5}, {0, .5, .5}};
@@ -140,22 +173,23 @@ std::vector<QuadraturePoint> tet_rule(int degree) {
 }
 
 std::vector<QuadraturePoint> quadrature_rule(ElementType type, int degree) {
-  if (type == ElementType::Hex20) return hex_gauss_rule(std::max(1, (degree + 2) / 2));
+  if (is_hex(type)) return hex_gauss_rule(std::max(1, (degree + 2) / 2));
   return tet_rule(degree);
 }
 
 void shape_functions(ElementType type, const Eigen::Vector3d& xi, Eigen::VectorXd& N, Eigen::MatrixX3d& dN) {
-  if (type == ElementType::Hex20)
-    hex20(xi, N, dN);
-  else
-    tet10(xi, N, dN);
+  switch (type) {
+    case ElementType::Hex20: hex20(xi, N, dN); return;
+    case ElementType::Hex27: hex27(xi, N, dN); return;
+    case ElementType::Tet10: tet10(xi, N, dN); return;
+  }
 }
 
 Eigen::MatrixX3d reference_nodes(ElementType type) {
   const int n = nodes_per_element(type);
   Eigen::MatrixX3d r(n, 3);
   for (int a = 0; a < n; ++a)
-    for (int k = 0; k < 3; ++k) r(a, k) = type == ElementType::Hex20 ? kHexRef[a][k] : kTetRef[a][k];
+    for (int k = 0; k < 3; ++k) r(a, k) = is_hex(type) ? kHexRef[a][k] : kTetRef[a][k];
   return r;
 }
 
@@ -168,7 +202,7 @@ Eigen::Matrix3Xd Mesh::element_nodes(int e) const {
 
 Eigen::Vector3d Mesh::centroid(int e) const {
   const auto conn = element(e);
-  const int corners = type == ElementType::Hex20 ? 8 : 4;
+  const int corners = is_hex(type) ? 8 : 4;
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   for (int a = 0; a < corners; ++a) c += nodes[static_cast<std::size_t>(conn[static_cast<std::size_t>(a)])];
   return c / corners;

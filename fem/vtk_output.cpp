@@ -31,7 +31,9 @@ void write_vtu(const std::filesystem::path& path, const Mesh& mesh, const VtuFie
   }
   vtkNew<vtkUnstructuredGrid> grid;
   grid->SetPoints(points);
-  const int cell_type = mesh.type == ElementType::Hex20 ? VTK_QUADRATIC_HEXAHEDRON : VTK_QUADRATIC_TETRA;
+  const int cell_type = mesh.type == ElementType::Hex20   ? VTK_QUADRATIC_HEXAHEDRON
+                        : mesh.type == ElementType::Hex27 ? VTK_TRIQUADRATIC_HEXAHEDRON
+                                                          : VTK_QUADRATIC_TETRA;
   std::vector<int> kept;
   for (int e = 0; e < mesh.element_count(); ++e) {
     if (!keep.empty() && !keep[static_cast<std::size_t>(e)]) continue;

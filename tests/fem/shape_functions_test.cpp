@@ -7,7 +7,7 @@
 using namespace drom::fem;
 
 TEST(ShapeFunctions, PartitionOfUnityAndNodalInterpolation) {
-  for (auto type : {ElementType::Hex20, ElementType::Tet10}) {
+  for (auto type : {ElementType::Hex20, ElementType::Hex27, ElementType::Tet10}) {
     const Eigen::MatrixX3d ref = reference_nodes(type);
     Eigen::VectorXd N;
     Eigen::MatrixX3d dN;
@@ -22,7 +22,7 @@ TEST(ShapeFunctions, PartitionOfUnityAndNodalInterpolation) {
 }
 
 TEST(ShapeFunctions, GradientsMatchFiniteDifferences) {
-  for (auto type : {ElementType::Hex20, ElementType::Tet10}) {
+  for (auto type : {ElementType::Hex20, ElementType::Hex27, ElementType::Tet10}) {
     const Eigen::Vector3d xi(0.13, 0.21, 0.17);
     Eigen::VectorXd N, Np, Nm;
     Eigen::MatrixX3d dN, unused;

@@ -1,0 +1,230 @@
+#include "pgd/pgd_solver.hpp"
+
+#include <Eigen/Dense>
+#include <kinsol/kinsol.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+namespace drom::pgd {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::array<Eigen::VectorXd, 3> split(const Eigen::VectorXd& v, Eigen::Index n) { return {v.segment(0, n), v.segment(n, n), v.segment(2 * n, n)}; }
+
+}  // namespace
+
+// What KINSOL's fixed-point function needs: the map S -> G(S) normalized by a fixed linear form, so
+// that the iteration converges to one representative of the product's scaling freedom.
+struct FixedPointContext {
+  PgdSolver* solver;
+  const ComponentTensors* residual;
+  Eigen::VectorXd normal;  // the normalization functional: normal . S = 1
+  std::array<Eigen::VectorXd, 3> R;
+  int evaluations = 0;
+};
+
+namespace {
+
+int fixed_point_map(N_Vector s, N_Vector g, void* data) {
+  auto* ctx = static_cast<FixedPointContext*>(data);
+  const auto n = static_cast<Eigen::Index>(N_VGetLength_Serial(s));
+  Eigen::Map<const Eigen::VectorXd> S(N_VGetArrayPointer_Serial(s), n);
+  Eigen::Map<Eigen::VectorXd> G(N_VGetArrayPointer_Serial(g), n);
+  Eigen::VectorXd next;
+  try {
+    ctx->solver->alternate(*ctx->residual, S, next, ctx->R);
+  } catch (...) {
+    return -1;
+  }
+  ++ctx->evaluations;
+  const double scale = ctx->normal.dot(next);
+  if (!(std::abs(scale) > 1e-12 * next.norm())) return 1;  // the product left the normalization's reach: recoverable
+  G = next / scale;
+  return 0;
+}
+
+struct SundialsContext {
+  SUNContext ctx = nullptr;
+  SundialsContext() {
+    if (SUNContext_Create(nullptr, &ctx) != 0) throw std::runtime_error("SUNDIALS: cannot create a context");
+  }
+  ~SundialsContext() { SUNContext_Free(&ctx); }
+};
+
+}  // namespace
+
+PgdSolver::PgdSolver(SeparatedOperator& op, PgdSettings settings) : op_(op), settings_(settings) {}
+
+void PgdSolver::alternate(const ComponentTensors& r, const Eigen::VectorXd& S_in, Eigen::VectorXd& S_out, std::array<Eigen::VectorXd, 3>& R) {
+  const auto& grid = op_.grid();
+  const Eigen::Index np = grid.plane_nodes(), nz = grid.thickness_nodes();
+  const auto S = split(S_in, nz);
+  // R: the 2D problem with S fixed; its right-hand side is the residual projected on S.
+  Eigen::VectorXd rhs(3 * np);
+  for (int i = 0; i < 3; ++i) rhs.segment(i * np, np).noalias() = r[static_cast<std::size_t>(i)] * S[static_cast<std::size_t>(i)];
+  const auto t0 = std::chrono::steady_clock::now();
+  plane_solver_.factorize(op_.plane_matrix(S));
+  const Eigen::VectorXd x = plane_solver_.solve(rhs);
+  plane_seconds_ += seconds_since(t0);
+  R = split(x, np);
+  // S: the 1D problem with R fixed.
+  Eigen::VectorXd rhs_z(3 * nz);
+  for (int i = 0; i < 3; ++i) rhs_z.segment(i * nz, nz).noalias() = r[static_cast<std::size_t>(i)].transpose() * R[static_cast<std::size_t>(i)];
+  S_out = op_.thickness_matrix(R).ldlt().solve(rhs_z);
+}
+
+bool PgdSolver::tucker_update(const ComponentTensors& F, SeparatedField& u, ComponentTensors& r) {
+  if (settings_.max_update_unknowns <= 0) return false;
+  SeparatedField basis = u;
+  basis.compress(settings_.compression_tolerance);
+  Eigen::Index n = 0;
+  for (int i = 0; i < 3; ++i) n += static_cast<Eigen::Index>(basis.terms(i)) * basis.terms(i);
+  if (n == 0 || n > settings_.max_update_unknowns) return false;
+  // Orthonormal plane factors (compress leaves the amplitude in X): the core carries it instead.
+  for (std::size_t i = 0; i < 3; ++i)
+    for (Eigen::Index q = 0; q < basis.X[i].cols(); ++q) basis.X[i].col(q).normalize();
+  const Eigen::MatrixXd G = op_.tucker_matrix(basis);
+  Eigen::VectorXd b(n);
+  Eigen::Index o = 0;
+  for (std::size_t i = 0; i < 3; ++i) {
+    const Eigen::Index q = basis.X[i].cols();
+    const Eigen::MatrixXd core = basis.X[i].transpose() * F[i] * basis.Z[i];
+    b.segment(o, q * q) = Eigen::Map<const Eigen::VectorXd>(core.data(), q * q);
+    o += q * q;
+  }
+  const Eigen::LLT<Eigen::MatrixXd> llt(G);
+  if (llt.info() != Eigen::Success) return false;
+  const Eigen::VectorXd c = llt.solve(b);
+  SeparatedField updated = SeparatedField::empty(op_.grid());
+  o = 0;
+  for (std::size_t i = 0; i < 3; ++i) {
+    const Eigen::Index q = basis.X[i].cols();
+    const Eigen::Map<const Eigen::MatrixXd> C(c.data() + o, q, q);
+    o += q * q;
+    updated.X[i] = basis.X[i] * C;
+    updated.Z[i] = basis.Z[i];
+  }
+  r = F;
+  op_.subtract_product(updated, r);
+  u = std::move(updated);
+  ++tucker_updates_;
+  return true;
+}
+
+SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField* warm_start, PgdReport& report) {
+  const auto start = std::chrono::steady_clock::now();
+  plane_seconds_ = 0;
+  tucker_updates_ = 0;
+  report = PgdReport{};
+  const auto& grid = op_.grid();
+  const Eigen::Index np = grid.plane_nodes(), nz = grid.thickness_nodes();
+  SeparatedField u = SeparatedField::empty(grid);
+  ComponentTensors r = F;
+  report.load_norm = op_.free_norm(F);
+  if (report.load_norm == 0) {
+    report.converged = true;
+    report.initial_ratio = report.final_ratio = 0;
+    return u;
+  }
+
+  // 1. Warm start: Galerkin projection on the previous terms, each component on its own.
+  if (warm_start && warm_start->max_terms() > 0) {
+    SeparatedField basis = *warm_start;
+    basis.compress(settings_.compression_tolerance);
+    const Eigen::MatrixXd G = op_.galerkin_matrix(basis);
+    Eigen::VectorXd b(G.rows());
+    Eigen::Index o = 0;
+    for (std::size_t i = 0; i < 3; ++i) {
+      const Eigen::MatrixXd XtF = basis.X[i].transpose() * F[i];
+      for (Eigen::Index q = 0; q < basis.X[i].cols(); ++q) b[o++] = XtF.row(q).dot(basis.Z[i].col(q));
+    }
+    const Eigen::VectorXd c = G.ldlt().solve(b);
+    o = 0;
+    for (std::size_t i = 0; i < 3; ++i)
+      for (Eigen::Index q = 0; q < basis.X[i].cols(); ++q) basis.X[i].col(q) *= c[o++];
+    report.warm_start_terms = static_cast<int>(G.rows());
+    op_.subtract_product(basis, r);
+    u = std::move(basis);
+  }
+  double ratio = op_.free_norm(r) / report.load_norm;
+  report.initial_ratio = ratio;
+
+  // 2. Enrichment.
+  SundialsContext sundials;
+  const auto n = static_cast<sunindextype>(3 * nz);
+  N_Vector s_vec = N_VNew_Serial(n, sundials.ctx), scale = N_VNew_Serial(n, sundials.ctx);
+  N_VConst(1.0, scale);
+  FixedPointContext ctx{this, &r, {}, {}, 0};
+  while (ratio > settings_.residual_tolerance && report.modes_added < settings_.max_modes) {
+    // Initial S: one power step on the residual, a cheap guess at its dominant thickness shape.
+    Eigen::VectorXd S0(3 * nz);
+    for (int i = 0; i < 3; ++i) {
+      const auto& ri = r[static_cast<std::size_t>(i)];
+      Eigen::VectorXd s = ri.transpose() * (ri * Eigen::VectorXd::Ones(nz));
+      S0.segment(i * nz, nz) = s;
+    }
+    if (S0.norm() == 0) S0.setOnes();
+    S0 /= S0.norm();
+    ctx.normal = S0;
+    ctx.evaluations = 0;
+    Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer_Serial(s_vec), n) = S0;
+
+    void* kin = KINCreate(sundials.ctx);
+    if (!kin) throw std::runtime_error("KINSOL: cannot create a solver");
+    KINSetMAA(kin, settings_.anderson_depth);
+    KINInit(kin, fixed_point_map, s_vec);
+    KINSetUserData(kin, &ctx);
+    KINSetFuncNormTol(kin, settings_.fixed_point_tolerance);
+    KINSetNumMaxIters(kin, settings_.max_fixed_point_iterations);
+    KINSetPrintLevel(kin, 0);
+    KINSetErrHandlerFn(kin, [](int, const char*, const char*, char*, void*) {}, nullptr);  // flags are handled below
+    const int flag = KINSol(kin, s_vec, KIN_FP, scale, scale);
+    KINFree(&kin);
+    if (flag < 0 && flag != KIN_MAXITER_REACHED) throw std::runtime_error("PGD fixed point failed (KINSOL flag " + std::to_string(flag) + ")");
+    if (flag == KIN_MAXITER_REACHED) ++report.unconverged_modes;
+    report.fixed_point_iterations += ctx.evaluations;
+
+    // The mode: R from the converged S (one more 2D solve keeps R and S consistent).
+    const Eigen::VectorXd S = Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer_Serial(s_vec), n);
+    Eigen::VectorXd unused;
+    alternate(r, S, unused, ctx.R);
+    SeparatedField mode = SeparatedField::empty(grid);
+    const auto Sc = split(S, nz);
+    for (int i = 0; i < 3; ++i)
+      if (ctx.R[static_cast<std::size_t>(i)].squaredNorm() > 0 && Sc[static_cast<std::size_t>(i)].squaredNorm() > 0)
+        mode.append(i, ctx.R[static_cast<std::size_t>(i)], Sc[static_cast<std::size_t>(i)]);
+    // Work of the residual on the new mode: with R the 2D Galerkin solution for S, the potential energy
+    // changes by -work / 2, so the energy decreases with every mode even where |r| does not.
+    double work = 0;
+    for (std::size_t i = 0; i < 3; ++i) work += ctx.R[i].dot(r[i] * Sc[i]);
+    report.energy_decrease.push_back(0.5 * work);
+    u.append(mode);
+    ++report.modes_added;
+    if (!tucker_update(F, u, r)) op_.subtract_product(mode, r);
+    const double next_ratio = op_.free_norm(r) / report.load_norm;
+    report.residual_ratio.push_back(next_ratio);
+    if (!std::isfinite(next_ratio)) throw std::runtime_error("PGD enrichment produced a non-finite residual");
+    ratio = next_ratio;
+  }
+  N_VDestroy(s_vec);
+  N_VDestroy(scale);
+  (void)np;
+
+  u.compress(settings_.compression_tolerance);
+  report.final_ratio = ratio;
+  report.converged = ratio <= settings_.residual_tolerance;
+  report.seconds = seconds_since(start);
+  report.plane_solve_seconds = plane_seconds_;
+  report.tucker_updates = tucker_updates_;
+  return u;
+}
+
+}  // namespace drom::pgd

@@ -1,0 +1,68 @@
+#pragma once
+// Greedy PGD solution of K u = F on a SeparatedOperator (design.md §4, seed Annex D):
+//   u_n = u_0 + sum_q R_q(u, v) S_q(t), one product at a time; each product by the alternating
+//   fixed point  S -> R (2D problem, S fixed) -> S (1D problem, R fixed), accelerated by SUNDIALS
+//   KINSOL's Anderson mixing (depth 0 = the plain fixed point of the seed);
+//   stop when |r_n| / |r_0| < residual_tolerance (eq. D.12) or at max_modes.
+// The residual r = F - K u is kept as one full-size tensor per component: projections onto S or R
+// are then matrix-vector products, and eq. D.12 is evaluated exactly, at a cost linear in the number
+// of thickness nodes (nothing plane x thickness is ever factorized).
+// Warm start: the previous solution's terms, split by component, are the initial basis; a Galerkin
+// projection on them sets their amplitudes, and enrichment adds what the new state needs.
+#include "fem/spd_solver.hpp"
+#include "pgd/separated_field.hpp"
+#include "pgd/separated_operator.hpp"
+
+#include <vector>
+
+namespace drom::pgd {
+
+struct PgdSettings {
+  double residual_tolerance = 1e-4;
+  double fixed_point_tolerance = 1e-3;
+  int max_modes = 80;
+  int max_fixed_point_iterations = 20;
+  int anderson_depth = 3;
+  // After each mode, the Galerkin solution on the tensor spans of the current plane and thickness
+  // factors (a Tucker core per component) when it has at most this many unknowns; 0 turns it off.
+  int max_update_unknowns = 0;
+  // Terms of the returned field whose singular value is below this (relative) are dropped.
+  double compression_tolerance = 1e-12;
+};
+
+struct PgdReport {
+  int modes_added = 0;
+  int fixed_point_iterations = 0;  // 2D + 1D solve pairs, over all modes
+  int unconverged_modes = 0;       // fixed points stopped by max_fixed_point_iterations
+  int warm_start_terms = 0;
+  double load_norm = 0;
+  double initial_ratio = 1;                // |F - K u_0| / |F| after the warm start
+  std::vector<double> residual_ratio;      // after each added mode
+  std::vector<double> energy_decrease;     // potential energy drop brought by each mode (N mm)
+  double final_ratio = 1;
+  bool converged = false;
+  int tucker_updates = 0;
+  double seconds = 0, plane_solve_seconds = 0;
+};
+
+class PgdSolver {
+ public:
+  PgdSolver(SeparatedOperator& op, PgdSettings settings);
+  // Solves K u = F. `warm_start` (may be null or empty) seeds the basis.
+  SeparatedField solve(const ComponentTensors& F, const SeparatedField* warm_start, PgdReport& report);
+  const PgdSettings& settings() const { return settings_; }
+  const fem::SolverStats& plane_solver_stats() const { return plane_solver_.stats(); }
+
+  // One alternating step on residual r: R from S (2D solve), then S from R (1D solve).
+  void alternate(const ComponentTensors& r, const Eigen::VectorXd& S_in, Eigen::VectorXd& S_out, std::array<Eigen::VectorXd, 3>& R);
+
+ private:
+  bool tucker_update(const ComponentTensors& F, SeparatedField& u, ComponentTensors& r);
+  int tucker_updates_ = 0;
+  SeparatedOperator& op_;
+  PgdSettings settings_;
+  fem::SpdSolver plane_solver_;
+  double plane_seconds_ = 0;
+};
+
+}  // namespace drom::pgd

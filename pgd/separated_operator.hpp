@@ -1,0 +1,113 @@
+#pragma once
+// The elasticity operator of design.md §3 on a TensorGrid, in separated form (seed Annex D,
+// eqs. D.15-D.19): every strain component is a sum of products (in-plane operator on X) x (thickness
+// operator and metric weight on Z), so with the indicator I = sum_m I_m^plane I_m^thickness the
+// stiffness is sum over (m, in-plane operator pair) of A (x) B, with A a 2D matrix on the plane and B a
+// 1D matrix through the thickness. Plates use Cartesian strains; cylindrical panels the strains of the
+// (arc length, axial, radial) frame with their 1/r curvature terms and the r/R volume weight.
+//
+// Nothing of size plane x thickness is ever factorized: the PGD solver only needs
+//   - the 2D matrix for fixed thickness functions S (plane_matrix),
+//   - the 1D matrix for fixed plane functions R (thickness_matrix),
+//   - products K u of separated fields (subtract_product), and the residual-stress load.
+#include "fem/element_operators.hpp"
+#include "fem/residual_stress.hpp"
+#include "pgd/material_indicator.hpp"
+#include "pgd/separated_field.hpp"
+#include "pgd/tensor_grid.hpp"
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include <array>
+#include <vector>
+
+namespace drom::pgd {
+
+// One term of a strain component: voigt (xx, yy, zz, yz, xz, xy of the local frame, engineering
+// shears) += weight(t) * (plane_op X)(u, v) * (thickness_op Z)(t) for displacement component `component`.
+struct StrainTerm {
+  enum Weight { One, OuterRadiusOverR, InverseR, MinusInverseR };
+  int voigt, component, plane_op /*0 value, 1 d/du, 2 d/dv*/, thickness_op /*0 value, 1 d/dt*/;
+  Weight weight;
+};
+std::vector<StrainTerm> strain_terms(bool curved);
+
+// Held dofs as a union of products: component `component` at the in-plane nodes flagged in `plane`
+// times the thickness nodes flagged in `thickness` (0/1 vectors). Held by a penalty, which keeps the
+// operator separable whatever the clamp's shape.
+struct PenaltyTerm {
+  int component = 0;
+  Eigen::VectorXd plane, thickness;
+};
+// Splits a list of 3D dofs (3 * Hex27 node + component) into the fewest such products.
+std::vector<PenaltyTerm> penalty_terms(const TensorGrid& grid, const std::vector<int>& dofs);
+
+class SeparatedOperator {
+ public:
+  SeparatedOperator(const TensorGrid& grid, const fem::Material& material);
+
+  // Removed material keeps `ersatz` of its stiffness (not of its stress), so nodes left without
+  // material stay determined without changing the rest beyond that relative amount.
+  void set_indicator(const MaterialIndicator& indicator, double ersatz = 1e-9);
+  // Penalty stiffness per held dof: factor * E * smallest element size.
+  void set_penalty(std::vector<PenaltyTerm> terms, double factor);
+  // A weak elastic foundation, stiffness per unit volume relative * E / L^2 (L the part's larger side),
+  // on every component: holds a free part against rigid motion with a separable term, where 3-2-1
+  // point supports would leave the 2D and 1D sub-problems singular. Its effect on the deformation is
+  // of order `relative`; 0 removes it.
+  void set_foundation(double relative);
+
+  const TensorGrid& grid() const { return grid_; }
+  int indicator_terms() const { return static_cast<int>(plane_factor_.size()); }
+
+  // |r| over the dofs that are not held: the residual of eq. D.11 against test functions that vanish
+  // on the clamps (the penalty's reactions are not out-of-balance forces).
+  double free_norm(const ComponentTensors& r) const;
+  // r -= K u, with the supports (penalty, foundation) or the elastic part only.
+  void subtract_product(const SeparatedField& u, ComponentTensors& r, bool with_supports = true) const;
+  // -int I eps(v) : sigma_R for a through-thickness profile (the load of design.md §3 before u0).
+  ComponentTensors stress_load(const fem::StressProfile& profile) const;
+
+  // 2D operator sum_ij <S_i, K_ij S_j> on the 3 x plane_nodes unknowns (block-major, lower triangle).
+  const Eigen::SparseMatrix<double>& plane_matrix(const std::array<Eigen::VectorXd, 3>& S);
+  // 1D operator <R_i, K_ij R_j> on the 3 x thickness_nodes unknowns (dense, symmetric).
+  Eigen::MatrixXd thickness_matrix(const std::array<Eigen::VectorXd, 3>& R) const;
+  // Galerkin matrix of the single-component functions of a field (component 0's terms first),
+  // entry (p, q) = a(phi_p, phi_q).
+  Eigen::MatrixXd galerkin_matrix(const SeparatedField& basis) const;
+  // Galerkin matrix on the tensor spans: unknowns C_i (X.terms(i) x Z.terms(i), column-major, component
+  // 0 first) of u_i = X_i C_i Z_i^T. Entry blocks are Kronecker products of plane and thickness factors.
+  Eigen::MatrixXd tucker_matrix(const SeparatedField& basis) const;
+
+ private:
+  using Values = Eigen::VectorXd;  // on the scalar plane pattern
+  void multiply_plane(const Values& A, const Eigen::MatrixXd& x, Eigen::MatrixXd& y) const;  // y = A x
+  int pair(int pa, int pb) const { return 3 * pa + pb; }
+
+  TensorGrid grid_;
+  fem::Matrix6d C_;
+  std::vector<StrainTerm> terms_;
+  // Scalar plane pattern (Quad9 connectivity), CSC with all entries.
+  Eigen::SparseMatrix<double> pattern_;
+  std::vector<std::array<int, 81>> element_slots_;  // nnz index of each (row a, col b) of each element
+  std::array<Eigen::Matrix<double, 9, 9>, 9> plane_element_;  // per operator pair (uniform grid)
+  std::array<Eigen::Matrix<double, 9, 1>, 3> plane_element_load_;
+  // Per thickness element and pair of strain terms: the 3x3 integral of weights and operators.
+  std::vector<std::vector<Eigen::Matrix3d>> thickness_element_;
+  std::vector<double> plane_factor_sign_;          // +1 for the intact term, -(1 - ersatz) for removed
+  std::vector<Eigen::VectorXd> plane_factor_, thickness_factor_, stress_factor_;  // per indicator term
+  std::vector<std::array<Values, 9>> A_;           // [m][pair]
+  std::vector<std::array<std::array<Eigen::MatrixXd, 9>, 9>> B_;  // [m][3 i + j][pair]
+  std::vector<std::array<std::array<bool, 9>, 9>> B_nonzero_;
+  std::vector<PenaltyTerm> penalty_;
+  double penalty_stiffness_ = 0;
+  double foundation_ = 0;
+  Eigen::MatrixXd thickness_mass_;
+  Values plane_mass_;
+  // Block 2D matrix: lower triangle of the 3 x 3 blocks, each slot mapped to (block, scalar nnz).
+  Eigen::SparseMatrix<double> plane_matrix_;
+  std::vector<int> slot_block_, slot_scalar_;
+};
+
+}  // namespace drom::pgd
