@@ -1,0 +1,100 @@
+// PGD against 3D FE on the same tensor discretization (Quad9 x Line3 = Hex27), both in one run, on the
+// same input: a 1000 x 1000 x 10 flat plate held on four bottom corner pads, a 600 x 600 x 2 pocket
+// machined to half its passes (flat floor, so the exact two-term indicator), the default case's even
+// profile. For each N_z: wall time, memory (CHOLMOD's factor peak against PGD's stored values) and the
+// PGD's max displacement difference to FE, relative. Prints JSON.
+//   build/bench/pgd_bench [plane_elements=20] [nz list, default 5,10,20,40,80] [fe_max_nz=40]
+#include "fem/elastic_problem.hpp"
+#include "fem/node_sets.hpp"
+#include "fem/supports.hpp"
+#include "pgd/pgd_problem.hpp"
+#include "support/resources.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+#include <string>
+
+using namespace drom;
+
+namespace {
+double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int n = argc > 1 ? std::atoi(argv[1]) : 20;
+  std::vector<int> nzs{5, 10, 20, 40, 80};
+  if (argc > 2) {
+    nzs.clear();
+    std::stringstream ss(argv[2]);
+    for (std::string item; std::getline(ss, item, ',');) nzs.push_back(std::stoi(item));
+  }
+  const int fe_max_nz = argc > 3 ? std::atoi(argv[3]) : 40;
+  const fem::Material material{71700.0, 0.33};
+  const fem::StressProfile profile{{2, 4, 6}, {-60, 30, -15}, {-40, 20, -10}};
+  std::printf("{\n  \"plane_elements\": [%d, %d],\n  \"runs\": [\n", n, n);
+  for (std::size_t r = 0; r < nzs.size(); ++r) {
+    const int nz = nzs[r];
+    const auto grid = pgd::TensorGrid::make(fem::PartShape::plate(1000, 1000, 10), n, n, nz);
+    const fem::Mesh mesh = grid.hex27_mesh();
+    // Pocket [200, 800]^2, 2 mm deep, machined over y < 500: half of the passes.
+    Eigen::VectorXd plane(grid.plane_elements());
+    for (int e = 0; e < grid.plane_elements(); ++e) {
+      const double u0 = (e % n) * grid.element_size_u(), v0 = (e / n) * grid.element_size_v();
+      const double fu = std::clamp((std::min(800.0, u0 + grid.element_size_u()) - std::max(200.0, u0)) / grid.element_size_u(), 0.0, 1.0);
+      const double fv = std::clamp((std::min(500.0, v0 + grid.element_size_v()) - std::max(200.0, v0)) / grid.element_size_v(), 0.0, 1.0);
+      plane[e] = fu * fv;
+    }
+    const auto indicator = pgd::MaterialIndicator::flat_bottom(grid, plane, 8.0);
+    std::vector<double> activity(static_cast<std::size_t>(grid.plane_elements() * grid.nt));
+    for (int k = 0; k < grid.nt; ++k)
+      for (int e = 0; e < grid.plane_elements(); ++e) activity[static_cast<std::size_t>(grid.element(e, k))] = indicator.value(e, k);
+    const auto faces = fem::boundary_faces(mesh);
+    const auto pads = fem::node_dofs(fem::face_nodes_where(mesh, faces, [&](const Eigen::Vector3d& x) {
+      return x.z() < 1e-9 && (x.x() <= 50 || x.x() >= 950) && (x.y() <= 50 || x.y() >= 950);
+    }));
+
+    double t0 = now();
+    pgd::PgdProblem pgd(grid, material, {profile}, {}, 1e8, 1e-12);
+    pgd.equilibrate();
+    const double pgd_equilibrate = now() - t0;
+    t0 = now();
+    pgd.set_indicator(indicator);
+    pgd.set_fixed_dofs(pads);
+    const Eigen::VectorXd u_pgd = pgd.solve(false).front().cartesian_nodal(grid);
+    const double pgd_solve = now() - t0;
+    const auto& rep = pgd.reports().front();
+
+    std::printf("    {\"nz\": %d, \"unknowns_3d\": %d, \"pgd\": {\"equilibrate_s\": %.3f, \"solve_s\": %.3f, \"modes\": %d, \"fixed_point_iterations\": %d, "
+                "\"residual_ratio\": %.2e, \"stored_values\": %zu, \"plane_solve_s\": %.3f}",
+                nz, 3 * grid.node_count(), pgd_equilibrate, pgd_solve, rep.modes_added, rep.fixed_point_iterations, rep.final_ratio,
+                pgd.solutions().front().stored_values(), rep.plane_solve_seconds);
+    if (nz <= fe_max_nz) {
+      t0 = now();
+      fem::ElasticProblem fe(mesh, grid.shape, material, {profile});
+      fe.equilibrate(fem::isostatic_dofs(mesh, grid.shape, std::vector<char>(static_cast<std::size_t>(mesh.node_count()), 1)));
+      const double fe_equilibrate = now() - t0;
+      t0 = now();
+      fe.set_activity(activity);
+      fe.set_fixed_dofs(pads);
+      fe.assemble_and_factorize();
+      const Eigen::VectorXd u_fe = fe.solve().col(0);
+      const double fe_solve = now() - t0;
+      double max_fe = 0, diff = 0;
+      const auto live = fe.live_nodes();
+      for (int node = 0; node < mesh.node_count(); ++node) {
+        if (!live[static_cast<std::size_t>(node)]) continue;
+        max_fe = std::max(max_fe, u_fe.segment<3>(3 * node).cwiseAbs().maxCoeff());
+        diff = std::max(diff, (u_fe.segment<3>(3 * node) - u_pgd.segment<3>(3 * node)).cwiseAbs().maxCoeff());
+      }
+      std::printf(", \"fe\": {\"equilibrate_s\": %.3f, \"solve_s\": %.3f, \"factor_peak_mb\": %.1f}, \"max_abs_u_fe_mm\": %.4e, "
+                  "\"relative_difference\": %.2e, \"speedup_solve\": %.1f",
+                  fe_equilibrate, fe_solve, static_cast<double>(fe.solver_stats().factor_peak_bytes) / 1048576.0, max_fe, diff / max_fe, fe_solve / pgd_solve);
+    }
+    std::printf(", \"peak_rss_mb\": %.0f}%s\n", static_cast<double>(peak_memory_bytes()) / 1048576.0, r + 1 < nzs.size() ? "," : "");
+    std::fflush(stdout);
+  }
+  std::printf("  ]\n}\n");
+  return 0;
+}
