@@ -3,7 +3,7 @@
 // machined to half its passes (flat floor, so the exact two-term indicator), the default case's even
 // profile. For each N_z: wall time, memory (CHOLMOD's factor peak against PGD's stored values) and the
 // PGD's max displacement difference to FE, relative. Prints JSON.
-//   build/bench/pgd_bench [plane_elements=20] [nz list, default 5,10,20,40,80] [fe_max_nz=40]
+//   build/bench/pgd_bench [plane_elements=20] [nz list, default 5,10,20,40,80] [fe_max_nz=40] [anderson_depth=3] [max_fixed_point_iterations=20]
 #include "fem/elastic_problem.hpp"
 #include "fem/node_sets.hpp"
 #include "fem/supports.hpp"
@@ -31,9 +31,13 @@ int main(int argc, char** argv) {
     for (std::string item; std::getline(ss, item, ',');) nzs.push_back(std::stoi(item));
   }
   const int fe_max_nz = argc > 3 ? std::atoi(argv[3]) : 40;
+  pgd::PgdSettings settings;
+  if (argc > 4) settings.anderson_depth = std::atoi(argv[4]);
+  if (argc > 5) settings.max_fixed_point_iterations = std::atoi(argv[5]);
   const fem::Material material{71700.0, 0.33};
   const fem::StressProfile profile{{2, 4, 6}, {-60, 30, -15}, {-40, 20, -10}};
-  std::printf("{\n  \"plane_elements\": [%d, %d],\n  \"runs\": [\n", n, n);
+  std::printf("{\n  \"plane_elements\": [%d, %d],\n  \"anderson_depth\": %d,\n  \"max_fixed_point_iterations\": %d,\n  \"runs\": [\n", n, n,
+              settings.anderson_depth, settings.max_fixed_point_iterations);
   for (std::size_t r = 0; r < nzs.size(); ++r) {
     const int nz = nzs[r];
     const auto grid = pgd::TensorGrid::make(fem::PartShape::plate(1000, 1000, 10), n, n, nz);
@@ -56,7 +60,7 @@ int main(int argc, char** argv) {
     }));
 
     double t0 = now();
-    pgd::PgdProblem pgd(grid, material, {profile}, {}, 1e8, 1e-12);
+    pgd::PgdProblem pgd(grid, material, {profile}, settings, 1e8, 1e-12);
     pgd.equilibrate();
     const double pgd_equilibrate = now() - t0;
     t0 = now();
