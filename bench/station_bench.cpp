@@ -20,10 +20,6 @@
 
 using namespace drom;
 
-namespace {
-double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-}  // namespace
-
 int main(int argc, char** argv) {
   const int wanted = argc > 1 ? std::atoi(argv[1]) : 8;
   const int n = argc > 2 ? std::atoi(argv[2]) : 40;
@@ -63,13 +59,13 @@ int main(int argc, char** argv) {
     problem.assemble_and_factorize();  // (b): symbolic analysis reused
     assembly += problem.assembly_seconds() - a0;
     reuse += problem.solver_stats().factorize_seconds - f0;
-    double t = now();
+    auto t = std::chrono::steady_clock::now();
     problem.solve();
-    solve += now() - t;
+    solve += seconds_since(t);
     fem::SpdSolver scratch;  // (a): from scratch on the same matrix
-    t = now();
+    t = std::chrono::steady_clock::now();
     scratch.factorize(problem.stiffness());
-    fresh += now() - t;
+    fresh += seconds_since(t);
     fresh_analyze += scratch.stats().analyze_seconds;
     ++measured;
   }

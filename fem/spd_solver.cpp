@@ -1,5 +1,7 @@
 #include "fem/spd_solver.hpp"
 
+#include "support/resources.hpp"
+
 #include <Eigen/CholmodSupport>
 
 #include <chrono>
@@ -7,12 +9,6 @@
 #include <stdexcept>
 
 namespace drom::fem {
-
-namespace {
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-}  // namespace
 
 struct SpdSolver::Impl {
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;

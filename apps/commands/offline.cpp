@@ -111,7 +111,7 @@ void write_field(const std::filesystem::path& path, const fem::ElasticProblem& p
 
 int simulate(const CommandOptions& options, bool truth) {
   const auto start = std::chrono::steady_clock::now();
-  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  auto elapsed = [&] { return seconds_since(start); };
   const bool interactive = isatty(2) != 0;
   const Case c = load_case(options.case_path, options.overrides);
   const PartModel part = build_part(c);

@@ -9,6 +9,7 @@
 #include "support/atomic_file.hpp"
 #include "support/hdf5_writer.hpp"
 #include "support/input_error.hpp"
+#include "support/resources.hpp"
 
 #include <chrono>
 #include <cstdio>
@@ -20,7 +21,7 @@ namespace drom::app {
 
 int removal_command(const CommandOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  auto elapsed = [&] { return seconds_since(start); };
   const Case c = load_case(options.case_path, options.overrides);
   const PartModel part = build_part(c);
   const auto& mesh = part.mesh;

@@ -9,6 +9,7 @@
 #include "fem/node_sets.hpp"
 #include "fem/supports.hpp"
 #include "fem/vtk_output.hpp"
+#include "support/resources.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -26,7 +27,7 @@ class Steps {
     if (!quiet_) std::cerr << "[" << ++done_ << "/" << total_ << " " << elapsed() << " s] " << what << "\n";
   }
   double elapsed() const {
-    return std::round(std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count() * 10) / 10;
+    return std::round(seconds_since(start_) * 10) / 10;
   }
 
  private:
