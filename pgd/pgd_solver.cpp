@@ -1,5 +1,7 @@
 #include "pgd/pgd_solver.hpp"
 
+#include "support/resources.hpp"
+
 #include <Eigen/Dense>
 #include <kinsol/kinsol.h>
 #include <nvector/nvector_serial.h>
@@ -13,13 +15,7 @@ namespace drom::pgd {
 
 namespace {
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 std::array<Eigen::VectorXd, 3> split(const Eigen::VectorXd& v, Eigen::Index n) { return {v.segment(0, n), v.segment(n, n), v.segment(2 * n, n)}; }
-
-}  // namespace
 
 // What KINSOL's fixed-point function needs: the map S -> G(S) normalized by a fixed linear form, so
 // that the iteration converges to one representative of the product's scaling freedom.
@@ -30,8 +26,6 @@ struct FixedPointContext {
   std::array<Eigen::VectorXd, 3> R;
   int evaluations = 0;
 };
-
-namespace {
 
 int fixed_point_map(N_Vector s, N_Vector g, void* data) {
   auto* ctx = static_cast<FixedPointContext*>(data);
@@ -59,22 +53,38 @@ struct SundialsContext {
   ~SundialsContext() { SUNContext_Free(&ctx); }
 };
 
+// Serial N_Vector owned for the scope (freed on every exit, exceptions included).
+struct SerialVector {
+  N_Vector v;
+  SerialVector(sunindextype n, SUNContext ctx) : v(N_VNew_Serial(n, ctx)) {
+    if (!v) throw std::runtime_error("SUNDIALS: cannot allocate a vector");
+  }
+  ~SerialVector() { N_VDestroy(v); }
+  SerialVector(const SerialVector&) = delete;
+  SerialVector& operator=(const SerialVector&) = delete;
+  Eigen::Map<Eigen::VectorXd> values() { return {N_VGetArrayPointer_Serial(v), static_cast<Eigen::Index>(N_VGetLength_Serial(v))}; }
+};
+
 }  // namespace
 
 PgdSolver::PgdSolver(SeparatedOperator& op, PgdSettings settings) : op_(op), settings_(settings) {}
 
-void PgdSolver::alternate(const ComponentTensors& r, const Eigen::VectorXd& S_in, Eigen::VectorXd& S_out, std::array<Eigen::VectorXd, 3>& R) {
-  const auto& grid = op_.grid();
-  const Eigen::Index np = grid.plane_nodes(), nz = grid.thickness_nodes();
-  const auto S = split(S_in, nz);
-  // R: the 2D problem with S fixed; its right-hand side is the residual projected on S.
+std::array<Eigen::VectorXd, 3> PgdSolver::plane_functions(const ComponentTensors& r, const Eigen::VectorXd& S_in) {
+  const Eigen::Index np = op_.grid().plane_nodes();
+  const auto S = split(S_in, op_.grid().thickness_nodes());
+  // The 2D problem with S fixed; its right-hand side is the residual projected on S.
   Eigen::VectorXd rhs(3 * np);
   for (int i = 0; i < 3; ++i) rhs.segment(i * np, np).noalias() = r[static_cast<std::size_t>(i)] * S[static_cast<std::size_t>(i)];
   const auto t0 = std::chrono::steady_clock::now();
   plane_solver_.factorize(op_.plane_matrix(S));
   const Eigen::VectorXd x = plane_solver_.solve(rhs);
   plane_seconds_ += seconds_since(t0);
-  R = split(x, np);
+  return split(x, np);
+}
+
+void PgdSolver::alternate(const ComponentTensors& r, const Eigen::VectorXd& S_in, Eigen::VectorXd& S_out, std::array<Eigen::VectorXd, 3>& R) {
+  const Eigen::Index nz = op_.grid().thickness_nodes();
+  R = plane_functions(r, S_in);
   // S: the 1D problem with R fixed.
   Eigen::VectorXd rhs_z(3 * nz);
   for (int i = 0; i < 3; ++i) rhs_z.segment(i * nz, nz).noalias() = r[static_cast<std::size_t>(i)].transpose() * R[static_cast<std::size_t>(i)];
@@ -125,7 +135,7 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
   tucker_updates_ = 0;
   report = PgdReport{};
   const auto& grid = op_.grid();
-  const Eigen::Index np = grid.plane_nodes(), nz = grid.thickness_nodes();
+  const Eigen::Index nz = grid.thickness_nodes();
   SeparatedField u = SeparatedField::empty(grid);
   ComponentTensors r = F;
   report.load_norm = op_.free_norm(F);
@@ -160,8 +170,8 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
   // 2. Enrichment.
   SundialsContext sundials;
   const auto n = static_cast<sunindextype>(3 * nz);
-  N_Vector s_vec = N_VNew_Serial(n, sundials.ctx), scale = N_VNew_Serial(n, sundials.ctx);
-  N_VConst(1.0, scale);
+  SerialVector s_vec(n, sundials.ctx), scale(n, sundials.ctx);
+  N_VConst(1.0, scale.v);
   FixedPointContext ctx{this, &r, {}, {}, 0};
   while (ratio > settings_.residual_tolerance && report.modes_added < settings_.max_modes) {
     // Initial S: one power step on the residual, a cheap guess at its dominant thickness shape.
@@ -175,27 +185,27 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
     S0 /= S0.norm();
     ctx.normal = S0;
     ctx.evaluations = 0;
-    Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer_Serial(s_vec), n) = S0;
+    s_vec.values() = S0;
 
     void* kin = KINCreate(sundials.ctx);
     if (!kin) throw std::runtime_error("KINSOL: cannot create a solver");
     KINSetMAA(kin, settings_.anderson_depth);
-    KINInit(kin, fixed_point_map, s_vec);
+    KINInit(kin, fixed_point_map, s_vec.v);
     KINSetUserData(kin, &ctx);
     KINSetFuncNormTol(kin, settings_.fixed_point_tolerance);
     KINSetNumMaxIters(kin, settings_.max_fixed_point_iterations);
     KINSetPrintLevel(kin, 0);
     KINSetErrHandlerFn(kin, [](int, const char*, const char*, char*, void*) {}, nullptr);  // flags are handled below
-    const int flag = KINSol(kin, s_vec, KIN_FP, scale, scale);
+    const int flag = KINSol(kin, s_vec.v, KIN_FP, scale.v, scale.v);
     KINFree(&kin);
     if (flag < 0 && flag != KIN_MAXITER_REACHED) throw std::runtime_error("PGD fixed point failed (KINSOL flag " + std::to_string(flag) + ")");
     if (flag == KIN_MAXITER_REACHED) ++report.unconverged_modes;
     report.fixed_point_iterations += ctx.evaluations;
 
-    // The mode: R from the converged S (one more 2D solve keeps R and S consistent).
-    const Eigen::VectorXd S = Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer_Serial(s_vec), n);
-    Eigen::VectorXd unused;
-    alternate(r, S, unused, ctx.R);
+    // The mode: R from the converged S (Anderson mixes iterates, so the last evaluation's R belongs to
+    // another S; one more 2D solve makes R the Galerkin partner of S).
+    const Eigen::VectorXd S = s_vec.values();
+    ctx.R = plane_functions(r, S);
     SeparatedField mode = SeparatedField::empty(grid);
     const auto Sc = split(S, nz);
     for (int i = 0; i < 3; ++i)
@@ -214,9 +224,6 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
     if (!std::isfinite(next_ratio)) throw std::runtime_error("PGD enrichment produced a non-finite residual");
     ratio = next_ratio;
   }
-  N_VDestroy(s_vec);
-  N_VDestroy(scale);
-  (void)np;
 
   u.compress(settings_.compression_tolerance);
   report.final_ratio = ratio;

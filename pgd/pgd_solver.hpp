@@ -50,9 +50,10 @@ class PgdSolver {
   PgdSolver(SeparatedOperator& op, PgdSettings settings);
   // Solves K u = F. `warm_start` (may be null or empty) seeds the basis.
   SeparatedField solve(const ComponentTensors& F, const SeparatedField* warm_start, PgdReport& report);
-  const PgdSettings& settings() const { return settings_; }
   const fem::SolverStats& plane_solver_stats() const { return plane_solver_.stats(); }
 
+  // The plane functions R that solve the 2D problem for thickness functions S, on residual r.
+  std::array<Eigen::VectorXd, 3> plane_functions(const ComponentTensors& r, const Eigen::VectorXd& S);
   // One alternating step on residual r: R from S (2D solve), then S from R (1D solve).
   void alternate(const ComponentTensors& r, const Eigen::VectorXd& S_in, Eigen::VectorXd& S_out, std::array<Eigen::VectorXd, 3>& R);
 

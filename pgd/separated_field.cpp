@@ -117,14 +117,13 @@ void SeparatedField::compress(double relative_tolerance) {
 void write_modes_hdf5(const std::filesystem::path& path, const TensorGrid& grid, const SeparatedField& field) {
   Hdf5Writer h5(path);
   const char* names[3] = {"u", "v", "w"};
+  // Row-major datasets: one row per node, one column per term.
+  auto rows = [](const Eigen::MatrixXd& m) {
+    std::vector<double> v(static_cast<std::size_t>(m.size()));
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(v.data(), m.rows(), m.cols()) = m;
+    return v;
+  };
   for (std::size_t i = 0; i < 3; ++i) {
-    // Row-major datasets: one row per node, one column per term.
-    auto rows = [](const Eigen::MatrixXd& m) {
-      std::vector<double> v(static_cast<std::size_t>(m.size()));
-      for (Eigen::Index r = 0; r < m.rows(); ++r)
-        for (Eigen::Index c = 0; c < m.cols(); ++c) v[static_cast<std::size_t>(r * m.cols() + c)] = m(r, c);
-      return v;
-    };
     h5.write(std::string("X_") + names[i], rows(field.X[i]), static_cast<std::size_t>(field.X[i].rows()), static_cast<std::size_t>(field.X[i].cols()));
     h5.write(std::string("Z_") + names[i], rows(field.Z[i]), static_cast<std::size_t>(field.Z[i].rows()), static_cast<std::size_t>(field.Z[i].cols()));
   }

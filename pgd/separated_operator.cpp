@@ -120,9 +120,11 @@ SeparatedOperator::SeparatedOperator(const TensorGrid& grid, const fem::Material
 
   // 3. Thickness element integrals per pair of strain terms (6 Gauss points: exact on plates, and
   //    to round-off for the smooth 1/r weights of thin panels).
+  //    The same points give the foundation's thickness mass matrix.
   fem::gauss_legendre(6, gx, gw);
   const std::size_t T = terms_.size();
   thickness_element_.assign(static_cast<std::size_t>(grid_.nt), std::vector<Eigen::Matrix3d>(T * T, Eigen::Matrix3d::Zero()));
+  thickness_mass_ = Eigen::MatrixXd::Zero(grid_.thickness_nodes(), grid_.thickness_nodes());
   for (int k = 0; k < grid_.nt; ++k) {
     const double t0 = grid_.levels[static_cast<std::size_t>(k)], h = grid_.levels[static_cast<std::size_t>(k + 1)] - t0;
     for (std::size_t q = 0; q < gx.size(); ++q) {
@@ -130,6 +132,7 @@ SeparatedOperator::SeparatedOperator(const TensorGrid& grid, const fem::Material
       const double r = grid_.curved() ? grid_.radius(t) : 1.0, R = grid_.curved() ? grid_.shape.outer_radius() : 1.0;
       const double w = gw[q] * 0.5 * h * (grid_.curved() ? r / R : 1.0);
       const Eigen::Vector3d op[2] = {line3(gx[q]), line3_derivative(gx[q]) * (2 / h)};
+      thickness_mass_.block<3, 3>(2 * k, 2 * k) += w * op[0] * op[0].transpose();
       for (std::size_t c = 0; c < T; ++c)
         for (std::size_t d = 0; d < T; ++d) {
           const double g = weight_value(terms_[c].weight, r, R) * weight_value(terms_[d].weight, r, R);
@@ -137,21 +140,6 @@ SeparatedOperator::SeparatedOperator(const TensorGrid& grid, const fem::Material
         }
     }
   }
-
-  // Mass matrices of the foundation (volume weight included).
-  thickness_mass_ = Eigen::MatrixXd::Zero(grid_.thickness_nodes(), grid_.thickness_nodes());
-  for (int k = 0; k < grid_.nt; ++k) {
-    const double t0 = grid_.levels[static_cast<std::size_t>(k)], h = grid_.levels[static_cast<std::size_t>(k + 1)] - t0;
-    for (std::size_t q = 0; q < gx.size(); ++q) {
-      const double t = t0 + 0.5 * h * (gx[q] + 1);
-      const double w = gw[q] * 0.5 * h * (grid_.curved() ? grid_.radius(t) / grid_.shape.outer_radius() : 1.0);
-      thickness_mass_.block<3, 3>(2 * k, 2 * k) += w * line3(gx[q]) * line3(gx[q]).transpose();
-    }
-  }
-  plane_mass_ = Values::Zero(pattern_.nonZeros());
-  for (int e = 0; e < grid_.plane_elements(); ++e)
-    for (int c = 0; c < 9; ++c)
-      for (int r = 0; r < 9; ++r) plane_mass_[element_slots_[static_cast<std::size_t>(e)][static_cast<std::size_t>(9 * c + r)]] += plane_element_[0](r, c);
 
   // 4. Block 2D pattern: blocks (i, j), i >= j, lower triangle only on the diagonal blocks.
   std::vector<Eigen::Triplet<double>> big;
@@ -167,12 +155,14 @@ SeparatedOperator::SeparatedOperator(const TensorGrid& grid, const fem::Material
   plane_matrix_.makeCompressed();
   slot_block_.resize(static_cast<std::size_t>(plane_matrix_.nonZeros()));
   slot_scalar_.resize(slot_block_.size());
+  diagonal_slot_.resize(static_cast<std::size_t>(3 * n));
   for (int col = 0; col < 3 * n; ++col)
     for (int p = plane_matrix_.outerIndexPtr()[col]; p < plane_matrix_.outerIndexPtr()[col + 1]; ++p) {
       const int row = plane_matrix_.innerIndexPtr()[p];
       const int i = row / n, j = col / n;
       slot_block_[static_cast<std::size_t>(p)] = 3 * i + j;
       slot_scalar_[static_cast<std::size_t>(p)] = slot(row % n, col % n);
+      if (row == col) diagonal_slot_[static_cast<std::size_t>(row)] = p;
     }
 
   set_indicator(MaterialIndicator::intact());
@@ -296,7 +286,7 @@ void SeparatedOperator::subtract_product(const SeparatedField& u, ComponentTenso
       if (t.component == j)
         r[static_cast<std::size_t>(j)].noalias() -= penalty_stiffness_ * (t.plane.asDiagonal() * X) * (t.thickness.asDiagonal() * Z).transpose();
     if (foundation_ > 0) {
-      multiply_plane(plane_mass_, X, AX);
+      multiply_plane(plane_mass(), X, AX);
       r[static_cast<std::size_t>(j)].noalias() -= foundation_ * AX * (thickness_mass_ * Z).transpose();
     }
   }
@@ -357,7 +347,7 @@ const Eigen::SparseMatrix<double>& SeparatedOperator::plane_matrix(const std::ar
             const double c = S[static_cast<std::size_t>(i)].dot(B_[m][ij][static_cast<std::size_t>(p)] * S[static_cast<std::size_t>(j)]);
             if (c != 0) comb += c * A_[m][static_cast<std::size_t>(p)];
           }
-      if (i == j && foundation_ > 0) comb += foundation_ * S[static_cast<std::size_t>(i)].dot(thickness_mass_ * S[static_cast<std::size_t>(i)]) * plane_mass_;
+      if (i == j && foundation_ > 0) comb += foundation_ * S[static_cast<std::size_t>(i)].dot(thickness_mass_ * S[static_cast<std::size_t>(i)]) * plane_mass();
     }
   double* val = plane_matrix_.valuePtr();
   for (std::size_t s = 0; s < slot_block_.size(); ++s) val[s] = block[static_cast<std::size_t>(slot_block_[s])][slot_scalar_[s]];
@@ -366,13 +356,13 @@ const Eigen::SparseMatrix<double>& SeparatedOperator::plane_matrix(const std::ar
     const auto& Si = S[static_cast<std::size_t>(t.component)];
     const double c = penalty_stiffness_ * Si.dot(t.thickness.asDiagonal() * Si);
     for (int a = 0; a < n; ++a)
-      if (t.plane[a] != 0) plane_matrix_.coeffRef(t.component * n + a, t.component * n + a) += c * t.plane[a];
+      if (t.plane[a] != 0) val[diagonal_slot_[static_cast<std::size_t>(t.component * n + a)]] += c * t.plane[a];
   }
   // A component whose thickness function vanishes has no stiffness in this sub-problem; a shift far
   // below round-off of the rest keeps the factorization defined and returns R_i = 0 for it.
   double largest = 0;
-  for (int d = 0; d < 3 * n; ++d) largest = std::max(largest, plane_matrix_.coeff(d, d));
-  for (int d = 0; d < 3 * n; ++d) plane_matrix_.coeffRef(d, d) += 1e-14 * largest;
+  for (int p : diagonal_slot_) largest = std::max(largest, val[p]);
+  for (int p : diagonal_slot_) val[p] += 1e-14 * largest;
   return plane_matrix_;
 }
 
@@ -402,7 +392,7 @@ Eigen::MatrixXd SeparatedOperator::thickness_matrix(const std::array<Eigen::Vect
   if (foundation_ > 0) {
     Eigen::MatrixXd MR;
     for (int i = 0; i < 3; ++i) {
-      multiply_plane(plane_mass_, R[static_cast<std::size_t>(i)], MR);
+      multiply_plane(plane_mass(), R[static_cast<std::size_t>(i)], MR);
       K.block(i * nz, i * nz, nz, nz) += foundation_ * R[static_cast<std::size_t>(i)].dot(MR.col(0)) * thickness_mass_;
     }
   }
@@ -410,64 +400,8 @@ Eigen::MatrixXd SeparatedOperator::thickness_matrix(const std::array<Eigen::Vect
   return K;
 }
 
-Eigen::MatrixXd SeparatedOperator::galerkin_matrix(const SeparatedField& basis) const {
+void SeparatedOperator::for_each_factor_pair(const SeparatedField& basis, const FactorVisitor& visit) const {
   const auto M = A_.size();
-  std::array<Eigen::Index, 4> offset{0, 0, 0, 0};
-  for (int i = 0; i < 3; ++i) offset[static_cast<std::size_t>(i + 1)] = offset[static_cast<std::size_t>(i)] + basis.terms(i);
-  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(offset[3], offset[3]);
-  Eigen::MatrixXd AX;
-  for (std::size_t m = 0; m < M; ++m)
-    for (int p = 0; p < 9; ++p)
-      for (int j = 0; j < 3; ++j) {
-        const auto& Xj = basis.X[static_cast<std::size_t>(j)];
-        if (Xj.cols() == 0) continue;
-        bool computed = false;
-        for (int i = 0; i < 3; ++i) {
-          const auto ij = static_cast<std::size_t>(3 * i + j);
-          const auto& Xi = basis.X[static_cast<std::size_t>(i)];
-          if (!B_nonzero_[m][ij][static_cast<std::size_t>(p)] || Xi.cols() == 0) continue;
-          if (!computed) multiply_plane(A_[m][static_cast<std::size_t>(p)], Xj, AX), computed = true;
-          const Eigen::MatrixXd plane = Xi.transpose() * AX;
-          const Eigen::MatrixXd thick = basis.Z[static_cast<std::size_t>(i)].transpose() * B_[m][ij][static_cast<std::size_t>(p)] * basis.Z[static_cast<std::size_t>(j)];
-          G.block(offset[static_cast<std::size_t>(i)], offset[static_cast<std::size_t>(j)], Xi.cols(), Xj.cols()) += plane.cwiseProduct(thick);
-        }
-      }
-  for (const auto& t : penalty_) {
-    const auto i = static_cast<std::size_t>(t.component);
-    if (basis.X[i].cols() == 0) continue;
-    const Eigen::MatrixXd plane = basis.X[i].transpose() * t.plane.asDiagonal() * basis.X[i];
-    const Eigen::MatrixXd thick = basis.Z[i].transpose() * t.thickness.asDiagonal() * basis.Z[i];
-    G.block(offset[i], offset[i], basis.X[i].cols(), basis.X[i].cols()) += penalty_stiffness_ * plane.cwiseProduct(thick);
-  }
-  if (foundation_ > 0)
-    for (std::size_t i = 0; i < 3; ++i) {
-      if (basis.X[i].cols() == 0) continue;
-      multiply_plane(plane_mass_, basis.X[i], AX);
-      const Eigen::MatrixXd plane = basis.X[i].transpose() * AX;
-      const Eigen::MatrixXd thick = basis.Z[i].transpose() * thickness_mass_ * basis.Z[i];
-      G.block(offset[i], offset[i], basis.X[i].cols(), basis.X[i].cols()) += foundation_ * plane.cwiseProduct(thick);
-    }
-  return G;
-}
-
-}  // namespace drom::pgd
-
-namespace drom::pgd {
-
-Eigen::MatrixXd SeparatedOperator::tucker_matrix(const SeparatedField& basis) const {
-  const auto M = A_.size();
-  std::array<Eigen::Index, 4> offset{0, 0, 0, 0};
-  for (int i = 0; i < 3; ++i)
-    offset[static_cast<std::size_t>(i + 1)] = offset[static_cast<std::size_t>(i)] + static_cast<Eigen::Index>(basis.terms(i)) * basis.terms(i);
-  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(offset[3], offset[3]);
-  // vec(X_i C Z_i^T) with C column-major: index p + Q_i s for plane term p and thickness term s, so a
-  // block is kron(thickness factor, plane factor).
-  auto add = [&](std::size_t i, std::size_t j, const Eigen::MatrixXd& plane, const Eigen::MatrixXd& thick) {
-    const Eigen::Index qi = basis.X[i].cols(), qj = basis.X[j].cols();
-    for (Eigen::Index s = 0; s < qi; ++s)
-      for (Eigen::Index t = 0; t < qj; ++t)
-        G.block(offset[i] + s * qi, offset[j] + t * qj, qi, qj) += thick(s, t) * plane;
-  };
   Eigen::MatrixXd AX;
   for (std::size_t m = 0; m < M; ++m)
     for (int p = 0; p < 9; ++p)
@@ -478,20 +412,44 @@ Eigen::MatrixXd SeparatedOperator::tucker_matrix(const SeparatedField& basis) co
           const std::size_t ij = 3 * i + j;
           if (!B_nonzero_[m][ij][static_cast<std::size_t>(p)] || basis.X[i].cols() == 0) continue;
           if (!computed) multiply_plane(A_[m][static_cast<std::size_t>(p)], basis.X[j], AX), computed = true;
-          add(i, j, basis.X[i].transpose() * AX, basis.Z[i].transpose() * B_[m][ij][static_cast<std::size_t>(p)] * basis.Z[j]);
+          visit(i, j, basis.X[i].transpose() * AX, basis.Z[i].transpose() * B_[m][ij][static_cast<std::size_t>(p)] * basis.Z[j]);
         }
       }
   for (const auto& t : penalty_) {
     const auto i = static_cast<std::size_t>(t.component);
     if (basis.X[i].cols() == 0) continue;
-    add(i, i, penalty_stiffness_ * basis.X[i].transpose() * t.plane.asDiagonal() * basis.X[i], basis.Z[i].transpose() * t.thickness.asDiagonal() * basis.Z[i]);
+    visit(i, i, penalty_stiffness_ * basis.X[i].transpose() * t.plane.asDiagonal() * basis.X[i], basis.Z[i].transpose() * t.thickness.asDiagonal() * basis.Z[i]);
   }
   if (foundation_ > 0)
     for (std::size_t i = 0; i < 3; ++i) {
       if (basis.X[i].cols() == 0) continue;
-      multiply_plane(plane_mass_, basis.X[i], AX);
-      add(i, i, foundation_ * basis.X[i].transpose() * AX, basis.Z[i].transpose() * thickness_mass_ * basis.Z[i]);
+      multiply_plane(plane_mass(), basis.X[i], AX);
+      visit(i, i, foundation_ * basis.X[i].transpose() * AX, basis.Z[i].transpose() * thickness_mass_ * basis.Z[i]);
     }
+}
+
+Eigen::MatrixXd SeparatedOperator::galerkin_matrix(const SeparatedField& basis) const {
+  std::array<Eigen::Index, 4> offset{0, 0, 0, 0};
+  for (int i = 0; i < 3; ++i) offset[static_cast<std::size_t>(i + 1)] = offset[static_cast<std::size_t>(i)] + basis.terms(i);
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(offset[3], offset[3]);
+  for_each_factor_pair(basis, [&](std::size_t i, std::size_t j, const Eigen::MatrixXd& plane, const Eigen::MatrixXd& thick) {
+    G.block(offset[i], offset[j], plane.rows(), plane.cols()) += plane.cwiseProduct(thick);
+  });
+  return G;
+}
+
+Eigen::MatrixXd SeparatedOperator::tucker_matrix(const SeparatedField& basis) const {
+  std::array<Eigen::Index, 4> offset{0, 0, 0, 0};
+  for (int i = 0; i < 3; ++i)
+    offset[static_cast<std::size_t>(i + 1)] = offset[static_cast<std::size_t>(i)] + static_cast<Eigen::Index>(basis.terms(i)) * basis.terms(i);
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(offset[3], offset[3]);
+  // vec(X_i C Z_i^T) with C column-major: index p + Q_i s for plane term p and thickness term s, so a
+  // block is kron(thickness factor, plane factor).
+  for_each_factor_pair(basis, [&](std::size_t i, std::size_t j, const Eigen::MatrixXd& plane, const Eigen::MatrixXd& thick) {
+    const Eigen::Index qi = plane.rows(), qj = plane.cols();
+    for (Eigen::Index s = 0; s < qi; ++s)
+      for (Eigen::Index t = 0; t < qj; ++t) G.block(offset[i] + s * qi, offset[j] + t * qj, qi, qj) += thick(s, t) * plane;
+  });
   return G;
 }
 

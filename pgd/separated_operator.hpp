@@ -20,6 +20,7 @@
 #include <Eigen/SparseCore>
 
 #include <array>
+#include <functional>
 #include <vector>
 
 namespace drom::pgd {
@@ -82,6 +83,10 @@ class SeparatedOperator {
 
  private:
   using Values = Eigen::VectorXd;  // on the scalar plane pattern
+  // Every term a(phi_i, phi_j) of two single-component sets of a field factors as (X_i^T A X_j) times
+  // (Z_i^T B Z_j); visits each pair of factors (elastic terms, penalty, foundation) once.
+  using FactorVisitor = std::function<void(std::size_t i, std::size_t j, const Eigen::MatrixXd& plane, const Eigen::MatrixXd& thickness)>;
+  void for_each_factor_pair(const SeparatedField& basis, const FactorVisitor& visit) const;
   void multiply_plane(const Values& A, const Eigen::MatrixXd& x, Eigen::MatrixXd& y) const;  // y = A x
   int pair(int pa, int pb) const { return 3 * pa + pb; }
 
@@ -96,7 +101,7 @@ class SeparatedOperator {
   // Per thickness element and pair of strain terms: the 3x3 integral of weights and operators.
   std::vector<std::vector<Eigen::Matrix3d>> thickness_element_;
   std::vector<double> plane_factor_sign_;          // +1 for the intact term, -(1 - ersatz) for removed
-  std::vector<Eigen::VectorXd> plane_factor_, thickness_factor_, stress_factor_;  // per indicator term
+  std::vector<Eigen::VectorXd> plane_factor_, thickness_factor_;  // per indicator term
   std::vector<std::array<Values, 9>> A_;           // [m][pair]
   std::vector<std::array<std::array<Eigen::MatrixXd, 9>, 9>> B_;  // [m][3 i + j][pair]
   std::vector<std::array<std::array<bool, 9>, 9>> B_nonzero_;
@@ -104,10 +109,11 @@ class SeparatedOperator {
   double penalty_stiffness_ = 0;
   double foundation_ = 0;
   Eigen::MatrixXd thickness_mass_;
-  Values plane_mass_;
+  // The intact term (m = 0, factor 1, sign +1) of the value-value pair is the plane mass matrix.
+  const Values& plane_mass() const { return A_[0][static_cast<std::size_t>(pair(0, 0))]; }
   // Block 2D matrix: lower triangle of the 3 x 3 blocks, each slot mapped to (block, scalar nnz).
   Eigen::SparseMatrix<double> plane_matrix_;
-  std::vector<int> slot_block_, slot_scalar_;
+  std::vector<int> slot_block_, slot_scalar_, diagonal_slot_;
 };
 
 }  // namespace drom::pgd

@@ -85,19 +85,12 @@ std::vector<double> layer_removed_depth(const pgd::TensorGrid& grid, double dept
   return a;
 }
 
-std::vector<double> layer_removed(const pgd::TensorGrid& grid, int layers) {
-  std::vector<double> a(static_cast<std::size_t>(grid.plane_elements() * grid.nt), 1.0);
-  for (int k = grid.nt - layers; k < grid.nt; ++k)
-    for (int e = 0; e < grid.plane_elements(); ++e) a[static_cast<std::size_t>(grid.element(e, k))] = 0;
-  return a;
-}
-
 }  // namespace
 
 TEST(PgdVersusFe, UniformLayerRemovalOfAFlatPlate) {
   const auto grid = pgd::TensorGrid::make(fem::PartShape::plate(200, 150, 6), 8, 6, 6);
   const fem::StressProfile profile{{2, 4}, {-60, 30}, {-40, 20}};
-  const auto c = compare(grid, profile, layer_removed(grid, 2), nullptr);
+  const auto c = compare(grid, profile, layer_removed_depth(grid, 2.0), nullptr);
   print("layer removal", c);
   EXPECT_LT(c.relative(), 1e-3);
 }
