@@ -11,20 +11,19 @@
 #include "fem/supports.hpp"
 #include "levelset/material_removal.hpp"
 #include "levelset/pocket_toolpath.hpp"
+#include "support/kernel_threads.hpp"
 #include "support/resources.hpp"
 
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <dlfcn.h>
 
 using namespace drom;
 
 int main(int argc, char** argv) {
   const int wanted = argc > 1 ? std::atoi(argv[1]) : 8;
   const int n = argc > 2 ? std::atoi(argv[2]) : 40;
-  using SetThreads = void (*)(int);
-  if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(1);  // as in drom offline
+  const SingleThreadedKernels single_threaded_kernels;  // as in drom offline
 
   const levelset::PartShape plate = levelset::PartShape::plate(1000, 1000, 10);
   const fem::Mesh mesh = fem::make_structured_hex_mesh(plate, {n, n, 5, 1.0});

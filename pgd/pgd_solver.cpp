@@ -77,6 +77,7 @@ std::array<Eigen::VectorXd, 3> PgdSolver::plane_functions(const ComponentTensors
   for (int i = 0; i < 3; ++i) rhs.segment(i * np, np).noalias() = r[static_cast<std::size_t>(i)] * S[static_cast<std::size_t>(i)];
   const auto t0 = std::chrono::steady_clock::now();
   plane_solver_.factorize(op_.plane_matrix(S));
+  ++factorizations_;
   const Eigen::VectorXd x = plane_solver_.solve(rhs);
   plane_seconds_ += seconds_since(t0);
   return split(x, np);
@@ -91,48 +92,36 @@ void PgdSolver::alternate(const ComponentTensors& r, const Eigen::VectorXd& S_in
   S_out = op_.thickness_matrix(R).ldlt().solve(rhs_z);
 }
 
-bool PgdSolver::tucker_update(const ComponentTensors& F, SeparatedField& u, ComponentTensors& r) {
-  if (settings_.max_update_unknowns <= 0) return false;
+bool PgdSolver::update_plane_functions(const ComponentTensors& F, SeparatedField& u, ComponentTensors& r) {
+  if (settings_.max_update_functions <= 0) return false;
   SeparatedField basis = u;
-  basis.compress(settings_.compression_tolerance);
-  Eigen::Index n = 0;
-  for (int i = 0; i < 3; ++i) n += static_cast<Eigen::Index>(basis.terms(i)) * basis.terms(i);
-  if (n == 0 || n > settings_.max_update_unknowns) return false;
-  // Orthonormal plane factors (compress leaves the amplitude in X): the core carries it instead.
-  for (std::size_t i = 0; i < 3; ++i)
-    for (Eigen::Index q = 0; q < basis.X[i].cols(); ++q) basis.X[i].col(q).normalize();
-  const Eigen::MatrixXd G = op_.tucker_matrix(basis);
-  Eigen::VectorXd b(n);
+  basis.compress(settings_.compression_tolerance);  // orthonormal thickness functions
+  const int functions = basis.terms(0) + basis.terms(1) + basis.terms(2);
+  if (functions == 0 || functions > settings_.max_update_functions) return false;
+  const auto t0 = std::chrono::steady_clock::now();
+  update_solver_.factorize(op_.plane_matrix(basis.Z));
+  ++factorizations_;
+  const Eigen::VectorXd b = op_.plane_load(F, basis.Z);
+  const Eigen::VectorXd x = update_solver_.solve(b);
+  plane_seconds_ += seconds_since(t0);
+  const Eigen::Index n = op_.grid().plane_nodes();
   Eigen::Index o = 0;
   for (std::size_t i = 0; i < 3; ++i) {
-    const Eigen::Index q = basis.X[i].cols();
-    const Eigen::MatrixXd core = basis.X[i].transpose() * F[i] * basis.Z[i];
-    b.segment(o, q * q) = Eigen::Map<const Eigen::VectorXd>(core.data(), q * q);
-    o += q * q;
-  }
-  const Eigen::LLT<Eigen::MatrixXd> llt(G);
-  if (llt.info() != Eigen::Success) return false;
-  const Eigen::VectorXd c = llt.solve(b);
-  SeparatedField updated = SeparatedField::empty(op_.grid());
-  o = 0;
-  for (std::size_t i = 0; i < 3; ++i) {
-    const Eigen::Index q = basis.X[i].cols();
-    const Eigen::Map<const Eigen::MatrixXd> C(c.data() + o, q, q);
-    o += q * q;
-    updated.X[i] = basis.X[i] * C;
-    updated.Z[i] = basis.Z[i];
+    basis.X[i] = Eigen::Map<const Eigen::MatrixXd>(x.data() + o, n, basis.Z[i].cols());
+    o += n * basis.Z[i].cols();
   }
   r = F;
-  op_.subtract_product(updated, r);
-  u = std::move(updated);
-  ++tucker_updates_;
+  op_.subtract_product(basis, r);
+  u = std::move(basis);
+  ++updates_;
   return true;
 }
 
 SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField* warm_start, PgdReport& report) {
   const auto start = std::chrono::steady_clock::now();
   plane_seconds_ = 0;
-  tucker_updates_ = 0;
+  updates_ = 0;
+  factorizations_ = 0;
   report = PgdReport{};
   const auto& grid = op_.grid();
   const Eigen::Index nz = grid.thickness_nodes();
@@ -201,6 +190,7 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
     if (flag < 0 && flag != KIN_MAXITER_REACHED) throw std::runtime_error("PGD fixed point failed (KINSOL flag " + std::to_string(flag) + ")");
     if (flag == KIN_MAXITER_REACHED) ++report.unconverged_modes;
     report.fixed_point_iterations += ctx.evaluations;
+    report.mode_iterations.push_back(ctx.evaluations);
 
     // The mode: R from the converged S (Anderson mixes iterates, so the last evaluation's R belongs to
     // another S; one more 2D solve makes R the Galerkin partner of S).
@@ -218,7 +208,7 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
     report.energy_decrease.push_back(0.5 * work);
     u.append(mode);
     ++report.modes_added;
-    if (!tucker_update(F, u, r)) op_.subtract_product(mode, r);
+    if (report.modes_added % std::max(1, settings_.update_every) != 0 || !update_plane_functions(F, u, r)) op_.subtract_product(mode, r);
     const double next_ratio = op_.free_norm(r) / report.load_norm;
     report.residual_ratio.push_back(next_ratio);
     if (!std::isfinite(next_ratio)) throw std::runtime_error("PGD enrichment produced a non-finite residual");
@@ -230,7 +220,8 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
   report.converged = ratio <= settings_.residual_tolerance;
   report.seconds = seconds_since(start);
   report.plane_solve_seconds = plane_seconds_;
-  report.tucker_updates = tucker_updates_;
+  report.plane_factorizations = factorizations_;
+  report.updates = updates_;
   return u;
 }
 

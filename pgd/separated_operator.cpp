@@ -141,29 +141,8 @@ SeparatedOperator::SeparatedOperator(const TensorGrid& grid, const fem::Material
     }
   }
 
-  // 4. Block 2D pattern: blocks (i, j), i >= j, lower triangle only on the diagonal blocks.
-  std::vector<Eigen::Triplet<double>> big;
-  for (int j = 0; j < 3; ++j)
-    for (int col = 0; col < n; ++col)
-      for (int p = pattern_.outerIndexPtr()[col]; p < pattern_.outerIndexPtr()[col + 1]; ++p) {
-        const int row = pattern_.innerIndexPtr()[p];
-        for (int i = j; i < 3; ++i)
-          if (i > j || row >= col) big.emplace_back(i * n + row, j * n + col, static_cast<double>(big.size()));
-      }
-  plane_matrix_.resize(3 * n, 3 * n);
-  plane_matrix_.setFromTriplets(big.begin(), big.end());
-  plane_matrix_.makeCompressed();
-  slot_block_.resize(static_cast<std::size_t>(plane_matrix_.nonZeros()));
-  slot_scalar_.resize(slot_block_.size());
-  diagonal_slot_.resize(static_cast<std::size_t>(3 * n));
-  for (int col = 0; col < 3 * n; ++col)
-    for (int p = plane_matrix_.outerIndexPtr()[col]; p < plane_matrix_.outerIndexPtr()[col + 1]; ++p) {
-      const int row = plane_matrix_.innerIndexPtr()[p];
-      const int i = row / n, j = col / n;
-      slot_block_[static_cast<std::size_t>(p)] = 3 * i + j;
-      slot_scalar_[static_cast<std::size_t>(p)] = slot(row % n, col % n);
-      if (row == col) diagonal_slot_[static_cast<std::size_t>(row)] = p;
-    }
+  scalar_diagonal_.resize(static_cast<std::size_t>(n));
+  for (int a = 0; a < n; ++a) scalar_diagonal_[static_cast<std::size_t>(a)] = slot(a, a);
 
   set_indicator(MaterialIndicator::intact());
 }
@@ -214,6 +193,10 @@ void SeparatedOperator::set_indicator(const MaterialIndicator& indicator, double
         }
       }
   }
+  plane_operators_.resize(pattern_.nonZeros(), 9 * M + 1);
+  for (int m = 0; m < M; ++m)
+    for (int p = 0; p < 9; ++p) plane_operators_.col(9 * m + p) = A_[static_cast<std::size_t>(m)][static_cast<std::size_t>(p)];
+  plane_operators_.col(9 * M) = plane_mass();
 }
 
 void SeparatedOperator::set_penalty(std::vector<PenaltyTerm> terms, double factor) {
@@ -333,37 +316,105 @@ ComponentTensors SeparatedOperator::stress_load(const fem::StressProfile& profil
 }
 
 const Eigen::SparseMatrix<double>& SeparatedOperator::plane_matrix(const std::array<Eigen::VectorXd, 3>& S) {
+  return plane_matrix(std::array<Eigen::MatrixXd, 3>{S[0], S[1], S[2]});
+}
+
+const Eigen::SparseMatrix<double>& SeparatedOperator::plane_matrix(const std::array<Eigen::MatrixXd, 3>& Z) {
+  const int n = grid_.plane_nodes();
   const auto M = A_.size();
-  const Eigen::Index nnz = pattern_.nonZeros();
-  std::array<Values, 9> block;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j <= i; ++j) {
-      const auto ij = static_cast<std::size_t>(3 * i + j);
-      Values& comb = block[ij];
-      comb = Values::Zero(nnz);
+  std::vector<std::pair<std::size_t, Eigen::Index>> functions;  // (component, column of Z)
+  for (std::size_t i = 0; i < 3; ++i)
+    for (Eigen::Index q = 0; q < Z[i].cols(); ++q) functions.emplace_back(i, q);
+  const auto F = static_cast<Eigen::Index>(functions.size());
+  const int* outer = pattern_.outerIndexPtr();
+  const int* inner = pattern_.innerIndexPtr();
+
+  // 1. Pattern: every block (I >= J) holds the scalar pattern, the diagonal blocks their lower half;
+  //    it depends on the number of functions only. Rows come sorted: block I ascending, then row.
+  if (plane_matrix_functions_ != F) {
+    const Eigen::Index size = F * n;
+    std::vector<int> col_start(static_cast<std::size_t>(size + 1), 0), rows;
+    std::size_t nnz = 0;
+    for (Eigen::Index J = 0; J < F; ++J)
+      for (int a = 0; a < n; ++a) {
+        col_start[static_cast<std::size_t>(J * n + a)] = static_cast<int>(nnz);
+        for (Eigen::Index I = J; I < F; ++I)
+          for (int p = outer[a]; p < outer[a + 1]; ++p)
+            if (I > J || inner[p] >= a) ++nnz;
+      }
+    col_start[static_cast<std::size_t>(size)] = static_cast<int>(nnz);
+    rows.reserve(nnz);
+    for (Eigen::Index J = 0; J < F; ++J)
+      for (int a = 0; a < n; ++a)
+        for (Eigen::Index I = J; I < F; ++I)
+          for (int p = outer[a]; p < outer[a + 1]; ++p)
+            if (I > J || inner[p] >= a) rows.push_back(static_cast<int>(I * n + inner[p]));
+    plane_matrix_ = Eigen::SparseMatrix<double>(size, size);
+    plane_matrix_.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+    std::copy(col_start.begin(), col_start.end(), plane_matrix_.outerIndexPtr());
+    std::copy(rows.begin(), rows.end(), plane_matrix_.innerIndexPtr());
+    plane_matrix_functions_ = F;
+  }
+
+  // 2. Values, one block column J at a time: the blocks (I, J) are the plane operators combined with
+  //    the thickness coefficients <Z_I, B Z_J> (one matrix product), plus penalty and foundation.
+  const auto P = plane_operators_.cols();
+  double* val = plane_matrix_.valuePtr();
+  std::size_t pos = 0;
+  Eigen::MatrixXd coefficients, blocks;
+  for (Eigen::Index J = 0; J < F; ++J) {
+    const auto [j, qj] = functions[static_cast<std::size_t>(J)];
+    const Eigen::VectorXd zj = Z[j].col(qj);
+    coefficients.setZero(P, F - J);
+    for (Eigen::Index I = J; I < F; ++I) {
+      const auto [i, qi] = functions[static_cast<std::size_t>(I)];
+      const Eigen::VectorXd zi = Z[i].col(qi);
+      const std::size_t ij = 3 * i + j;
       for (std::size_t m = 0; m < M; ++m)
         for (int p = 0; p < 9; ++p)
-          if (B_nonzero_[m][ij][static_cast<std::size_t>(p)]) {
-            const double c = S[static_cast<std::size_t>(i)].dot(B_[m][ij][static_cast<std::size_t>(p)] * S[static_cast<std::size_t>(j)]);
-            if (c != 0) comb += c * A_[m][static_cast<std::size_t>(p)];
-          }
-      if (i == j && foundation_ > 0) comb += foundation_ * S[static_cast<std::size_t>(i)].dot(thickness_mass_ * S[static_cast<std::size_t>(i)]) * plane_mass();
+          if (B_nonzero_[m][ij][static_cast<std::size_t>(p)])
+            coefficients(static_cast<Eigen::Index>(9 * m) + p, I - J) = zi.dot(B_[m][ij][static_cast<std::size_t>(p)] * zj);
+      if (i == j && foundation_ > 0) coefficients(P - 1, I - J) = foundation_ * zi.dot(thickness_mass_ * zj);
     }
-  double* val = plane_matrix_.valuePtr();
-  for (std::size_t s = 0; s < slot_block_.size(); ++s) val[s] = block[static_cast<std::size_t>(slot_block_[s])][slot_scalar_[s]];
-  const int n = grid_.plane_nodes();
-  for (const auto& t : penalty_) {
-    const auto& Si = S[static_cast<std::size_t>(t.component)];
-    const double c = penalty_stiffness_ * Si.dot(t.thickness.asDiagonal() * Si);
+    blocks.noalias() = plane_operators_ * coefficients;
+    for (const auto& t : penalty_)
+      for (Eigen::Index I = J; I < F; ++I) {
+        const auto [i, qi] = functions[static_cast<std::size_t>(I)];
+        if (static_cast<int>(i) != t.component || i != j) continue;
+        const double c = penalty_stiffness_ * Z[i].col(qi).dot(t.thickness.asDiagonal() * zj);
+        for (int a = 0; a < n; ++a)
+          if (t.plane[a] != 0) blocks(scalar_diagonal_[static_cast<std::size_t>(a)], I - J) += c * t.plane[a];
+      }
     for (int a = 0; a < n; ++a)
-      if (t.plane[a] != 0) val[diagonal_slot_[static_cast<std::size_t>(t.component * n + a)]] += c * t.plane[a];
+      for (Eigen::Index I = J; I < F; ++I)
+        for (int p = outer[a]; p < outer[a + 1]; ++p)
+          if (I > J || inner[p] >= a) val[pos++] = blocks(p, I - J);
   }
-  // A component whose thickness function vanishes has no stiffness in this sub-problem; a shift far
-  // below round-off of the rest keeps the factorization defined and returns R_i = 0 for it.
+  // A function with no stiffness in this sub-problem (a component whose thickness function vanishes)
+  // gets a tiny diagonal so the factorization stays defined and returns 0 for it. Only such blocks:
+  // a shift anywhere else would change the operator (measured: relative to the clamps' penalty it
+  // left a 1e-4 residual). The diagonal is each column's first entry.
+  const int* col = plane_matrix_.outerIndexPtr();
   double largest = 0;
-  for (int p : diagonal_slot_) largest = std::max(largest, val[p]);
-  for (int p : diagonal_slot_) val[p] += 1e-14 * largest;
+  for (Eigen::Index c = 0; c < plane_matrix_.cols(); ++c) largest = std::max(largest, val[col[c]]);
+  for (Eigen::Index J = 0; J < F; ++J) {
+    double block_largest = 0;
+    for (Eigen::Index c = J * n; c < (J + 1) * n; ++c) block_largest = std::max(block_largest, val[col[c]]);
+    if (block_largest > 1e-300) continue;
+    for (Eigen::Index c = J * n; c < (J + 1) * n; ++c) val[col[c]] += 1e-14 * largest;
+  }
   return plane_matrix_;
+}
+
+Eigen::VectorXd SeparatedOperator::plane_load(const ComponentTensors& F, const std::array<Eigen::MatrixXd, 3>& Z) const {
+  const Eigen::Index n = grid_.plane_nodes();
+  Eigen::VectorXd b(n * (Z[0].cols() + Z[1].cols() + Z[2].cols()));
+  Eigen::Index o = 0;
+  for (std::size_t i = 0; i < 3; ++i) {
+    Eigen::Map<Eigen::MatrixXd>(b.data() + o, n, Z[i].cols()).noalias() = F[i] * Z[i];
+    o += n * Z[i].cols();
+  }
+  return b;
 }
 
 Eigen::MatrixXd SeparatedOperator::thickness_matrix(const std::array<Eigen::VectorXd, 3>& R) const {
@@ -396,7 +447,10 @@ Eigen::MatrixXd SeparatedOperator::thickness_matrix(const std::array<Eigen::Vect
       K.block(i * nz, i * nz, nz, nz) += foundation_ * R[static_cast<std::size_t>(i)].dot(MR.col(0)) * thickness_mass_;
     }
   }
-  K.diagonal().array() += 1e-14 * K.diagonal().maxCoeff();  // as in plane_matrix
+  for (int i = 0; i < 3; ++i) {  // as in plane_matrix: a diagonal for components without stiffness only
+    auto d = K.diagonal().segment(i * nz, nz);
+    if (d.maxCoeff() <= 1e-300) d.array() += 1e-14 * K.diagonal().maxCoeff();
+  }
   return K;
 }
 
@@ -434,21 +488,6 @@ Eigen::MatrixXd SeparatedOperator::galerkin_matrix(const SeparatedField& basis) 
   Eigen::MatrixXd G = Eigen::MatrixXd::Zero(offset[3], offset[3]);
   for_each_factor_pair(basis, [&](std::size_t i, std::size_t j, const Eigen::MatrixXd& plane, const Eigen::MatrixXd& thick) {
     G.block(offset[i], offset[j], plane.rows(), plane.cols()) += plane.cwiseProduct(thick);
-  });
-  return G;
-}
-
-Eigen::MatrixXd SeparatedOperator::tucker_matrix(const SeparatedField& basis) const {
-  std::array<Eigen::Index, 4> offset{0, 0, 0, 0};
-  for (int i = 0; i < 3; ++i)
-    offset[static_cast<std::size_t>(i + 1)] = offset[static_cast<std::size_t>(i)] + static_cast<Eigen::Index>(basis.terms(i)) * basis.terms(i);
-  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(offset[3], offset[3]);
-  // vec(X_i C Z_i^T) with C column-major: index p + Q_i s for plane term p and thickness term s, so a
-  // block is kron(thickness factor, plane factor).
-  for_each_factor_pair(basis, [&](std::size_t i, std::size_t j, const Eigen::MatrixXd& plane, const Eigen::MatrixXd& thick) {
-    const Eigen::Index qi = plane.rows(), qj = plane.cols();
-    for (Eigen::Index s = 0; s < qi; ++s)
-      for (Eigen::Index t = 0; t < qj; ++t) G.block(offset[i] + s * qi, offset[j] + t * qj, qi, qj) += thick(s, t) * plane;
   });
   return G;
 }

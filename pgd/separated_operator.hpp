@@ -70,16 +70,20 @@ class SeparatedOperator {
   // -int I eps(v) : sigma_R for a through-thickness profile (the load of design.md §3 before u0).
   ComponentTensors stress_load(const fem::StressProfile& profile) const;
 
-  // 2D operator sum_ij <S_i, K_ij S_j> on the 3 x plane_nodes unknowns (block-major, lower triangle).
+  // 2D operator of the Galerkin problem on (any plane functions) x span(Z_i), component by component:
+  // unknowns X_i (plane_nodes x Z_i.cols()), component 0's columns first, one block of plane_nodes per
+  // column; lower triangle. With one column per component (Z_i = S_i) it is the 2D problem of a new
+  // mode, sum_ij <S_i, K_ij S_j>; with every thickness function found so far it is the update that
+  // re-solves all plane functions at once.
+  const Eigen::SparseMatrix<double>& plane_matrix(const std::array<Eigen::MatrixXd, 3>& Z);
   const Eigen::SparseMatrix<double>& plane_matrix(const std::array<Eigen::VectorXd, 3>& S);
+  // Its right-hand side for the load F: the blocks F_i Z_i.
+  Eigen::VectorXd plane_load(const ComponentTensors& F, const std::array<Eigen::MatrixXd, 3>& Z) const;
   // 1D operator <R_i, K_ij R_j> on the 3 x thickness_nodes unknowns (dense, symmetric).
   Eigen::MatrixXd thickness_matrix(const std::array<Eigen::VectorXd, 3>& R) const;
   // Galerkin matrix of the single-component functions of a field (component 0's terms first),
   // entry (p, q) = a(phi_p, phi_q).
   Eigen::MatrixXd galerkin_matrix(const SeparatedField& basis) const;
-  // Galerkin matrix on the tensor spans: unknowns C_i (X.terms(i) x Z.terms(i), column-major, component
-  // 0 first) of u_i = X_i C_i Z_i^T. Entry blocks are Kronecker products of plane and thickness factors.
-  Eigen::MatrixXd tucker_matrix(const SeparatedField& basis) const;
 
  private:
   using Values = Eigen::VectorXd;  // on the scalar plane pattern
@@ -111,9 +115,12 @@ class SeparatedOperator {
   Eigen::MatrixXd thickness_mass_;
   // The intact term (m = 0, factor 1, sign +1) of the value-value pair is the plane mass matrix.
   const Values& plane_mass() const { return A_[0][static_cast<std::size_t>(pair(0, 0))]; }
-  // Block 2D matrix: lower triangle of the 3 x 3 blocks, each slot mapped to (block, scalar nnz).
-  Eigen::SparseMatrix<double> plane_matrix_;
-  std::vector<int> slot_block_, slot_scalar_, diagonal_slot_;
+  // Every plane operator of the current indicator as one column (9 m + pair), then the plane mass:
+  // the 2D matrix's blocks are this times a coefficient matrix, one product per block column.
+  Eigen::MatrixXd plane_operators_;
+  std::vector<int> scalar_diagonal_;  // nnz index of (a, a) in pattern_
+  Eigen::SparseMatrix<double> plane_matrix_;  // pattern built for plane_matrix_functions_ functions
+  Eigen::Index plane_matrix_functions_ = -1;
 };
 
 }  // namespace drom::pgd

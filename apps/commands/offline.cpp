@@ -14,6 +14,7 @@
 #include "support/atomic_file.hpp"
 #include "support/hdf5_writer.hpp"
 #include "support/input_error.hpp"
+#include "support/kernel_threads.hpp"
 #include "support/resources.hpp"
 
 #include <atomic>
@@ -26,7 +27,6 @@
 #include <mutex>
 #include <sstream>
 #include <thread>
-#include <dlfcn.h>
 #include <unistd.h>
 
 namespace drom::app {
@@ -151,13 +151,10 @@ int simulate(const CommandOptions& options, bool truth) {
 
   // 3. Stations, in parallel (independent given activity), each one checkpointed.
   const int threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
-  {
-    // Station workers fill the cores; BLAS threads inside each factorization would fight them
-    // (measured: a third of the run in system time). Single-threaded BLAS also rounds the same way
-    // whatever --threads is, so the database does not depend on it. OpenBLAS exposes its setter.
-    using SetThreads = void (*)(int);
-    if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(1);
-  }
+  // Station workers fill the cores; threads inside each factorization would fight them (measured: a
+  // third of the run in system time). Single-threaded kernels also round the same way whatever
+  // --threads is, so the database does not depend on it.
+  const SingleThreadedKernels single_threaded_kernels;
   const int wanted_frames = options.frames >= 0 ? options.frames : (truth ? 10 : 0);
   const std::size_t frames = static_cast<std::size_t>(std::min<int>(wanted_frames, static_cast<int>(ns)));
   auto is_frame = [&](std::size_t k) { return frames > 0 && ((k + 1) * frames / ns != k * frames / ns || k + 1 == ns); };

@@ -1,0 +1,24 @@
+#pragma once
+// Threads inside the numerical kernels (OpenBLAS, and the OpenMP regions CHOLMOD's supernodal
+// factorization opens with a hard-coded num_threads(4)).
+//
+// Where the caller already runs one solve per core (station workers), or where each solve is small
+// (PGD's 2D problems: ~5k unknowns, thousands of factorizations), those inner threads only sleep and
+// wake: measured on the 2-core machine, two thirds of a PGD solve went to sched_yield and futex waits.
+// OMP_NUM_THREADS cannot undo an explicit num_threads clause, but a zero max-active-levels makes every
+// parallel region run on the calling thread. Both libraries are reached through dlsym, so nothing
+// breaks when another BLAS or a CHOLMOD without OpenMP is linked.
+namespace drom {
+
+class SingleThreadedKernels {
+ public:
+  SingleThreadedKernels();   // kernels run on the calling thread from here...
+  ~SingleThreadedKernels();  // ...until the previous settings are restored
+  SingleThreadedKernels(const SingleThreadedKernels&) = delete;
+  SingleThreadedKernels& operator=(const SingleThreadedKernels&) = delete;
+
+ private:
+  int blas_threads_ = -1, omp_levels_ = -1;
+};
+
+}  // namespace drom
