@@ -81,9 +81,9 @@ int main(int argc, char** argv) {
       for (std::size_t q = 0; q < rep.residual_ratio.size(); ++q) std::fprintf(stderr, "mode %zu: %d iterations, ratio %.3e, energy %.3e\n", q + 1, rep.mode_iterations[q], rep.residual_ratio[q], rep.energy_decrease[q]);
 
     std::printf("    {\"nz\": %d, \"unknowns_3d\": %d, \"pgd\": {\"equilibrate_s\": %.3f, \"solve_s\": %.3f, \"modes\": %d, \"fixed_point_iterations\": %d, "
-                "\"residual_ratio\": %.2e, \"stored_values\": %zu, \"plane_solve_s\": %.3f, \"factorizations\": %d, \"updates\": %d}",
+                "\"residual_ratio\": %.2e, \"stored_values\": %zu, \"plane_solve_s\": %.3f, \"factorizations\": %d, \"updates\": %d, \"update_s\": %.3f}",
                 nz, 3 * grid.node_count(), pgd_equilibrate, pgd_solve, rep.modes_added, rep.fixed_point_iterations, rep.final_ratio,
-                pgd.solutions().front().stored_values(), rep.plane_solve_seconds, rep.plane_factorizations, rep.updates);
+                pgd.solutions().front().stored_values(), rep.plane_solve_seconds, rep.plane_factorizations, rep.updates, rep.update_seconds);
     single_threaded.reset();
     if (nz <= fe_max_nz) {
       t0 = std::chrono::steady_clock::now();

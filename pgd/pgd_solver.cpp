@@ -104,6 +104,7 @@ bool PgdSolver::update_plane_functions(const ComponentTensors& F, SeparatedField
   const Eigen::VectorXd b = op_.plane_load(F, basis.Z);
   const Eigen::VectorXd x = update_solver_.solve(b);
   plane_seconds_ += seconds_since(t0);
+  update_seconds_ += seconds_since(t0);
   const Eigen::Index n = op_.grid().plane_nodes();
   Eigen::Index o = 0;
   for (std::size_t i = 0; i < 3; ++i) {
@@ -121,6 +122,7 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
   const auto start = std::chrono::steady_clock::now();
   plane_seconds_ = 0;
   updates_ = 0;
+  update_seconds_ = 0;
   factorizations_ = 0;
   report = PgdReport{};
   const auto& grid = op_.grid();
@@ -222,6 +224,7 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
   report.plane_solve_seconds = plane_seconds_;
   report.plane_factorizations = factorizations_;
   report.updates = updates_;
+  report.update_seconds = update_seconds_;
   return u;
 }
 

@@ -51,6 +51,7 @@ struct PgdReport {
   double final_ratio = 1;
   bool converged = false;
   int updates = 0;                   // plane-function updates
+  double update_seconds = 0;         // of which in the updates (included in plane_solve_seconds)
   int plane_factorizations = 0;      // 2D Cholesky factorizations (modes and updates)
   double seconds = 0, plane_solve_seconds = 0;
 };
@@ -70,6 +71,7 @@ class PgdSolver {
  private:
   bool update_plane_functions(const ComponentTensors& F, SeparatedField& u, ComponentTensors& r);
   int updates_ = 0;
+  double update_seconds_ = 0;
   fem::SpdSolver update_solver_;
   SeparatedOperator& op_;
   PgdSettings settings_;
