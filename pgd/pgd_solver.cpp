@@ -136,9 +136,14 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
     return u;
   }
 
-  // 1. Warm start: Galerkin projection on the previous terms, each component on its own.
+  // 1. Warm start: the update on the previous thickness functions (every plane function solved
+  //    again), or, when they are too many for it, a Galerkin projection on the previous terms.
   if (warm_start && warm_start->max_terms() > 0) {
-    SeparatedField basis = *warm_start;
+    u = *warm_start;
+    report.warm_start_terms = u.terms(0) + u.terms(1) + u.terms(2);
+  }
+  if (report.warm_start_terms > 0 && !update_plane_functions(F, u, r)) {
+    SeparatedField basis = u;
     basis.compress(settings_.compression_tolerance);
     const Eigen::MatrixXd G = op_.galerkin_matrix(basis);
     Eigen::VectorXd b(G.rows());
@@ -151,7 +156,6 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
     o = 0;
     for (std::size_t i = 0; i < 3; ++i)
       for (Eigen::Index q = 0; q < basis.X[i].cols(); ++q) basis.X[i].col(q) *= c[o++];
-    report.warm_start_terms = static_cast<int>(G.rows());
     op_.subtract_product(basis, r);
     u = std::move(basis);
   }
@@ -217,6 +221,9 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
     ratio = next_ratio;
   }
 
+  // Stopped by the mode cap after modes the last update did not see: one more update.
+  if (ratio > settings_.residual_tolerance && report.modes_added % std::max(1, settings_.update_every) != 0 && update_plane_functions(F, u, r))
+    ratio = op_.free_norm(r) / report.load_norm;
   u.compress(settings_.compression_tolerance);
   report.final_ratio = ratio;
   report.converged = ratio <= settings_.residual_tolerance;

@@ -10,8 +10,8 @@
 // Update: after each mode, all plane functions are solved again on the span of the thickness functions
 // found so far (one coupled 2D problem), so a mode only has to bring a new thickness shape; the
 // fields of thin parts have few of them (measured: 5-6 per component to 1e-5 on a machined plate).
-// Warm start: the previous solution's terms, split by component, are the initial basis; a Galerkin
-// projection on them sets their amplitudes, and enrichment adds what the new state needs.
+// Warm start: the previous solution's thickness functions are the first update's basis (a Galerkin
+// projection on its terms when they are too many), and enrichment adds what the new state needs.
 #include "fem/spd_solver.hpp"
 #include "pgd/separated_field.hpp"
 #include "pgd/separated_operator.hpp"
@@ -21,7 +21,9 @@
 namespace drom::pgd {
 
 struct PgdSettings {
-  double residual_tolerance = 1e-4;
+  // eq. D.12. Measured on the bench plate (N_z = 10 and 20): a ratio of 1e-2 already puts the
+  // displacement within 1.3e-6 of the 3D FE's; 1e-3 leaves a margin.
+  double residual_tolerance = 1e-3;
   double fixed_point_tolerance = 1e-3;
   int max_modes = 80;
   int max_fixed_point_iterations = 20;
