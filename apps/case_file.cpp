@@ -35,8 +35,32 @@ void read_part(CaseReader& r, Case& c) {
   }
 }
 
+void read_solver(CaseReader& r, Case& c) {
+  c.solver = r.choice("solver.kind", {"fe", "pgd"}, "fe");
+  if (c.solver != "pgd") {
+    for (const char* key : {"solver.residual_tolerance", "solver.fixed_point_tolerance", "solver.max_modes", "solver.max_fixed_point_iterations",
+                            "solver.anderson_depth", "solver.max_update_functions", "solver.update_every", "solver.indicator_tolerance", "solver.penalty"})
+      if (r.has(key)) r.fail(key, "is a setting of the PGD solver: it needs solver.kind = \"pgd\"");
+    return;
+  }
+  if (c.shape == "stl") r.fail("solver.kind", "pgd separates the plane from the thickness: it needs a plate or a panel, not an STL part");
+  auto& s = c.pgd;
+  s.residual_tolerance = r.real("solver.residual_tolerance", Range::open(0, 1), s.residual_tolerance);
+  s.fixed_point_tolerance = r.real("solver.fixed_point_tolerance", Range::open(0, 1), s.fixed_point_tolerance);
+  s.max_modes = static_cast<int>(r.integer("solver.max_modes", 1, 1000, s.max_modes));
+  s.max_fixed_point_iterations = static_cast<int>(r.integer("solver.max_fixed_point_iterations", 1, 1000, s.max_fixed_point_iterations));
+  s.anderson_depth = static_cast<int>(r.integer("solver.anderson_depth", 0, 20, s.anderson_depth));
+  s.max_update_functions = static_cast<int>(r.integer("solver.max_update_functions", 0, 300, s.max_update_functions));
+  s.update_every = static_cast<int>(r.integer("solver.update_every", 1, 100, s.update_every));
+  c.pgd_indicator_tolerance = r.real("solver.indicator_tolerance", Range::open(0, 1), c.pgd_indicator_tolerance);
+  c.pgd_penalty = r.real("solver.penalty", Range::closed(1e3, 1e14), c.pgd_penalty);
+}
+
 void read_mesh(CaseReader& r, Case& c) {
-  c.element = r.choice("mesh.element", {"hex20", "hex27", "tet10"}, c.shape == "stl" ? "tet10" : "hex20");
+  const char* fallback = c.shape == "stl" ? "tet10" : c.solver == "pgd" ? "hex27" : "hex20";
+  c.element = r.choice("mesh.element", {"hex20", "hex27", "tet10"}, fallback);
+  if (c.solver == "pgd" && c.element != "hex27")
+    r.fail("mesh.element", "solver.kind = \"pgd\" solves on the tensor product of Quad9 and Line3 elements: expected \"hex27\"");
   if (c.element != "tet10") {
     if (c.shape == "stl") r.fail("mesh.element", c.element + " meshes are structured: STL parts need \"tet10\"");
     c.nx = static_cast<int>(r.integer("mesh.nx", 1, 2000));
@@ -161,6 +185,7 @@ Case load_case(const std::optional<std::filesystem::path>& path, const std::vect
   read_part(r, c);
   c.young_modulus = r.real("material.young_modulus", Range::positive());
   c.poisson_ratio = r.real("material.poisson_ratio", Range{-1, 0.5, true, true});
+  read_solver(r, c);
   read_mesh(r, c);
   read_stress(r, c);
   read_pocket(r, c);

@@ -1,6 +1,8 @@
 #pragma once
 // A drom case: the part, its mesh, material, residual stress, pocket and clamps, read from TOML
 // (docs/case-files.md lists every key, its unit and its range).
+#include "pgd/pgd_solver.hpp"
+
 #include <array>
 #include <filesystem>
 #include <optional>
@@ -27,6 +29,12 @@ struct Case {
 
   // [material]
   double young_modulus = 0, poisson_ratio = 0;
+
+  // [solver]
+  std::string solver = "fe";    // fe (3D finite elements), pgd (plane x thickness separated, hex27)
+  pgd::PgdSettings pgd;         // the PGD's tolerances and caps
+  double pgd_penalty = 1e8;     // clamp penalty, relative to 2G x smallest element size
+  double pgd_indicator_tolerance = 1e-6;  // truncation of the material indicator's SVD
 
   // [mesh]
   std::string element;  // hex20, hex27, tet10

@@ -16,6 +16,7 @@ struct Range {
   static Range non_negative() { return {0, 1e300, false, false}; }
   static Range closed(double a, double b) { return {a, b, false, false}; }
   static Range open_closed(double a, double b) { return {a, b, true, false}; }
+  static Range open(double a, double b) { return {a, b, true, true}; }
   std::string describe() const;
   bool contains(double v) const;
 };

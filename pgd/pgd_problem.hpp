@@ -43,6 +43,7 @@ class PgdProblem {
   const std::vector<PgdReport>& reports() const { return reports_; }
   const std::vector<PgdReport>& equilibration_reports() const { return u0_reports_; }
   const MaterialIndicator& indicator() const { return indicator_; }
+  const std::vector<double>& activity() const { return activity_; }  // as represented by the indicator
   // Hex27 nodes touching remaining material.
   std::vector<char> live_nodes() const;
   const fem::SolverStats& plane_solver_stats() const { return solver_.plane_solver_stats(); }

@@ -6,9 +6,8 @@
 #include "apps/case_setup.hpp"
 #include "apps/machining_run.hpp"
 #include "apps/commands.hpp"
+#include "apps/station_solvers.hpp"
 #include "apps/summary.hpp"
-#include "fem/elastic_problem.hpp"
-#include "fem/supports.hpp"
 #include "fem/target_surface.hpp"
 #include "fem/vtk_output.hpp"
 #include "support/atomic_file.hpp"
@@ -92,21 +91,15 @@ std::string station_name(std::size_t k) {
   return buf;
 }
 
-// Truth: its displacement. Offline: one displacement per unit profile (`displacement_P2_11` = unit
-// sigma11 coefficient of P2); the stress shown is the first column's.
-void write_field(const std::filesystem::path& path, const fem::ElasticProblem& problem, const Eigen::MatrixXd& U, bool truth) {
-  std::vector<std::pair<std::string, Eigen::VectorXd>> displacements;
-  if (truth) displacements.emplace_back("displacement", U.col(0));
-  for (Eigen::Index p = 0; !truth && p < U.cols(); ++p) {
-    const auto& prof = problem.profiles()[static_cast<std::size_t>(p)];
-    std::string name = "displacement";
-    for (std::size_t j = 0; j < prof.degrees.size(); ++j) {
-      if (prof.sigma11[j] != 0) name += "_P" + std::to_string(prof.degrees[j]) + "_11";
-      if (prof.sigma22[j] != 0) name += "_P" + std::to_string(prof.degrees[j]) + "_22";
-    }
-    displacements.emplace_back(name, U.col(p));
+// Offline fields are named after their unit profile: `displacement_P2_11` = unit sigma11 coefficient
+// of P2.
+std::string profile_name(const fem::StressProfile& prof) {
+  std::string name = "displacement";
+  for (std::size_t j = 0; j < prof.degrees.size(); ++j) {
+    if (prof.sigma11[j] != 0) name += "_P" + std::to_string(prof.degrees[j]) + "_11";
+    if (prof.sigma22[j] != 0) name += "_P" + std::to_string(prof.degrees[j]) + "_22";
   }
-  fem::write_solution_vtu(path, problem, displacements);
+  return name;
 }
 
 int simulate(const CommandOptions& options, bool truth) {
@@ -145,54 +138,71 @@ int simulate(const CommandOptions& options, bool truth) {
     std::cerr << "drom " << mode << ": " << c.name << ": " << ns << " stations, " << mesh.dof_count() << " unknowns, " << P << " profile"
               << (P > 1 ? "s" : "") << ", " << target.size() << " target-surface nodes (removal " << removal_seconds << " s)\n";
 
-  // 2. Equilibrate once; every worker adopts it.
-  fem::ElasticProblem base(mesh, part.shape, part.material, profiles);
-  base.equilibrate(fem::isostatic_dofs(mesh, part.shape, std::vector<char>(static_cast<std::size_t>(mesh.node_count()), 1)));
-
-  // 3. Stations, in parallel (independent given activity), each one checkpointed.
-  const int threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
   // Station workers fill the cores; threads inside each factorization would fight them (measured: a
   // third of the run in system time). Single-threaded kernels also round the same way whatever
   // --threads is, so the database does not depend on it.
   const SingleThreadedKernels single_threaded_kernels;
+
+  // 2. Equilibrate once; every worker adopts it.
+  const auto solvers = StationSolvers::create(c, part, profiles, clamped);
+  const double equilibrium_seconds = elapsed() - removal_seconds;
+
+  // 3. Stations, in parallel (independent given activity, or chunks of them for a warm-starting
+  //    solver), each one checkpointed.
+  const int threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
   const int wanted_frames = options.frames >= 0 ? options.frames : (truth ? 10 : 0);
   const std::size_t frames = static_cast<std::size_t>(std::min<int>(wanted_frames, static_cast<int>(ns)));
   auto is_frame = [&](std::size_t k) { return frames > 0 && ((k + 1) * frames / ns != k * frames / ns || k + 1 == ns); };
+  auto names = [&](const Eigen::MatrixXd& U) {
+    NamedDisplacements named;
+    if (truth) named.emplace_back("displacement", U.col(0));
+    for (Eigen::Index p = 0; !truth && p < U.cols(); ++p) named.emplace_back(profile_name(profiles[static_cast<std::size_t>(p)]), U.col(p));
+    return named;
+  };
+  const std::size_t chunk = solvers->chunk();
+  const std::size_t chunks = (ns + chunk - 1) / chunk;
   std::atomic<std::size_t> next{0};
   std::atomic<int> solved{0};
   std::mutex report;
   std::exception_ptr failure;
-  double factorize_seconds = 0, assembly_seconds = 0, analyze_seconds = 0;
+  nlohmann::json solver_statistics = nlohmann::json::object();
   std::size_t done_before = 0;
   for (std::size_t k = 0; k < ns; ++k) done_before += checkpoint.has(station_name(k));
   auto worker = [&] {
     try {
-      fem::ElasticProblem problem(mesh, part.shape, part.material, profiles);
-      problem.adopt_equilibrium(base);
-      problem.set_fixed_dofs(clamped);
-      for (std::size_t k = next++; k < ns; k = next++) {
-        if (checkpoint.has(station_name(k))) continue;
-        if (options.stop_after >= 0 && solved.fetch_add(1) >= options.stop_after) break;
-        problem.set_activity(activity[k]);
-        problem.assemble_and_factorize();
-        const Eigen::MatrixXd U = problem.solve();
-        Eigen::MatrixXd W(static_cast<Eigen::Index>(target.size()), P);
-        for (std::size_t i = 0; i < target.size(); ++i) W.row(static_cast<Eigen::Index>(i)) = U.row(3 * target[i] + 2);
-        if (is_frame(k)) write_field(options.out / "frames" / (station_name(k) + ".vtu"), problem, U, truth);
-        checkpoint.save(station_name(k), W);
-        std::lock_guard<std::mutex> lock(report);
-        const auto done = static_cast<double>(++done_before);
-        const bool report_now = interactive || static_cast<std::size_t>(done) % std::max<std::size_t>(1, ns / 50) == 0 || static_cast<std::size_t>(done) == ns;
-        if (!options.quiet && report_now) {
-          const double rate = (done) / std::max(1e-9, elapsed() - removal_seconds);
-          std::fprintf(stderr, "%s  station %zu/%zu  %.2f stations/s  %.0f s left%s", interactive ? "\r" : "", static_cast<std::size_t>(done), ns, rate,
-                       (static_cast<double>(ns) - done) / rate, interactive ? "   " : "\n");
+      const auto solver = solvers->make_worker();
+      bool stopped = false;
+      for (std::size_t j = next++; j < chunks && !stopped; j = next++) {
+        const std::size_t first = j * chunk, last = std::min(ns, first + chunk);
+        std::size_t missing = first;
+        while (missing < last && checkpoint.has(station_name(missing))) ++missing;
+        if (missing == last) continue;
+        // A chunk restarts from its first station (cold), so a resumed run solves exactly what an
+        // uninterrupted one does; finished stations are recomputed but not written again.
+        for (std::size_t k = first; k < last; ++k) {
+          const bool saved = checkpoint.has(station_name(k));
+          if (!saved && options.stop_after >= 0 && solved.fetch_add(1) >= options.stop_after) {
+            stopped = true;
+            break;
+          }
+          const Eigen::MatrixXd U = solver->solve(activity[k], k > first);
+          if (saved) continue;
+          Eigen::MatrixXd W(static_cast<Eigen::Index>(target.size()), P);
+          for (std::size_t i = 0; i < target.size(); ++i) W.row(static_cast<Eigen::Index>(i)) = U.row(3 * target[i] + 2);
+          if (is_frame(k)) solver->write_vtu(options.out / "frames" / (station_name(k) + ".vtu"), names(U));
+          checkpoint.save(station_name(k), W);
+          std::lock_guard<std::mutex> lock(report);
+          const auto done = static_cast<double>(++done_before);
+          const bool report_now = interactive || static_cast<std::size_t>(done) % std::max<std::size_t>(1, ns / 50) == 0 || static_cast<std::size_t>(done) == ns;
+          if (!options.quiet && report_now) {
+            const double rate = done / std::max(1e-9, elapsed() - removal_seconds - equilibrium_seconds);
+            std::fprintf(stderr, "%s  station %zu/%zu  %.2f stations/s  %.0f s left%s", interactive ? "\r" : "", static_cast<std::size_t>(done), ns, rate,
+                         (static_cast<double>(ns) - done) / rate, interactive ? "   " : "\n");
+          }
         }
       }
       std::lock_guard<std::mutex> lock(report);
-      factorize_seconds += problem.solver_stats().factorize_seconds;
-      analyze_seconds += problem.solver_stats().analyze_seconds;
-      assembly_seconds += problem.assembly_seconds();
+      accumulate(solver_statistics, solver->statistics());
     } catch (...) {
       std::lock_guard<std::mutex> lock(report);
       failure = std::current_exception();
@@ -210,26 +220,12 @@ int simulate(const CommandOptions& options, bool truth) {
     return 0;
   }
 
-  // 4. The free final shape (3-2-1, best-fit alignment), one column per profile.
+  // 4. The free final shape (best-fit alignment), one column per profile.
   if (!checkpoint.has("final")) {
-    fem::ElasticProblem problem(mesh, part.shape, part.material, profiles);
-    problem.adopt_equilibrium(base);
-    problem.set_activity(activity.back());
-    const auto live = problem.live_nodes();
-    problem.set_fixed_dofs(fem::isostatic_dofs(mesh, part.shape, live));
-    problem.assemble_and_factorize();
-    Eigen::MatrixXd U = problem.solve();
-    std::vector<int> live_list;
-    for (int n = 0; n < mesh.node_count(); ++n)
-      if (live[static_cast<std::size_t>(n)]) live_list.push_back(n);
-    for (Eigen::Index p = 0; p < P; ++p) {
-      Eigen::VectorXd u = U.col(p);
-      fem::remove_rigid_motion(mesh, live_list, u);
-      for (int d = 0; d < mesh.dof_count(); ++d)
-        if (problem.orphan_dofs()[static_cast<std::size_t>(d)]) u[d] = 0;
-      U.col(p) = u;
-    }
-    write_field(options.out / "final_free_shape.vtu", problem, U, truth);
+    const auto solver = solvers->make_worker();
+    const Eigen::MatrixXd U = solver->free_shape(activity.back());
+    solver->write_vtu(options.out / "final_free_shape.vtu", names(U));
+    accumulate(solver_statistics, {{"final_shape", solver->statistics()}});
     checkpoint.save("final", U);
   }
 
@@ -319,7 +315,10 @@ int simulate(const CommandOptions& options, bool truth) {
                               {"time_s", elapsed()},
                               {"removal_time_s", removal_seconds},
                               {"time_per_station_s", (elapsed() - removal_seconds) / static_cast<double>(ns)},
-                              {"solver_time_s", {{"assembly", assembly_seconds}, {"analyze", analyze_seconds}, {"factorize", factorize_seconds}}},
+                              {"solver", c.solver},
+                              {"solver_statistics", solver_statistics},
+                              {"equilibrium", solvers->equilibrium_statistics()},
+                              {"equilibrium_time_s", equilibrium_seconds},
                               {"peak_memory_mb", static_cast<double>(peak_memory_bytes()) / 1048576.0},
                               {"database_mb", static_cast<double>(db_size) / 1048576.0},
                               {"max_abs_B1_mm", max_w},

@@ -61,12 +61,30 @@ TEST(CaseFile, OverridesReachEveryKindOfValue) {
 
 TEST(CaseFile, UnknownKeysAreRejectedByName) {
   EXPECT_NE(error_of({"mesh.nxx=3"}).find("mesh.nxx: unknown key"), std::string::npos);
-  EXPECT_NE(error_of({"solver.kind=pgd"}).find("solver.kind: unknown key"), std::string::npos);
+  EXPECT_NE(error_of({"tool.colour='red'"}).find("tool.colour: unknown key"), std::string::npos);
   const auto path = write_temp("typo.toml", std::string(drom::app::embedded_default_case()) + "\n[material]\n");
   // A duplicated table is a TOML error with its line.
   EXPECT_NE(error_of({}, path).find("typo.toml:"), std::string::npos);
   const auto typo = write_temp("typo2.toml", "name = 'x'\n[part]\nshape = 'plate'\nlenght_x = 3\n");
   EXPECT_NE(error_of({}, typo).find("part.length_x"), std::string::npos);  // missing comes first
+}
+
+TEST(CaseFile, SolverSectionChoosesPgdWithItsTolerances) {
+  // The default case meshes with hex20: the PGD's tensor space is hex27, and the error says so.
+  EXPECT_NE(error_of({"solver.kind=pgd"}).find("mesh.element"), std::string::npos);
+  EXPECT_NE(error_of({"solver.kind=pgd"}).find("hex27"), std::string::npos);
+  // PGD settings without the PGD are a mistake, not silently ignored.
+  EXPECT_NE(error_of({"solver.max_modes=10"}).find("solver.max_modes: is a setting of the PGD solver"), std::string::npos);
+  EXPECT_NE(error_of({"solver.kind='bem'"}).find("solver.kind"), std::string::npos);
+  const auto c = load_case(std::nullopt, {"solver.kind=pgd", "mesh.element=hex27", "solver.residual_tolerance=1e-5", "solver.max_modes=40",
+                                          "solver.anderson_depth=0", "solver.update_every=2", "solver.penalty=1e9"});
+  EXPECT_EQ(c.solver, "pgd");
+  EXPECT_EQ(c.pgd.residual_tolerance, 1e-5);
+  EXPECT_EQ(c.pgd.max_modes, 40);
+  EXPECT_EQ(c.pgd.anderson_depth, 0);
+  EXPECT_EQ(c.pgd.update_every, 2);
+  EXPECT_EQ(c.pgd_penalty, 1e9);
+  EXPECT_NE(error_of({"solver.kind=pgd", "mesh.element=hex27", "solver.residual_tolerance=2"}).find("solver.residual_tolerance"), std::string::npos);
 }
 
 TEST(CaseFile, WrongTypesMissingFieldsAndRangesNameTheKeyAndLine) {
