@@ -16,7 +16,33 @@ struct SpdSolver::Impl {
   Eigen::Index size = -1;
 };
 
-SpdSolver::SpdSolver() : impl_(std::make_unique<Impl>()) {}
+SpdSolver::SpdSolver(bool keep_order) : impl_(std::make_unique<Impl>()) {
+  if (keep_order) {
+    auto& common = impl_->llt.cholmod();
+    common.nmethods = 1;
+    common.method[0].ordering = CHOLMOD_NATURAL;
+  }
+}
+
+std::vector<int> fill_reducing_ordering(const Eigen::SparseMatrix<double>& lower) {
+  static std::mutex analysis;  // METIS's generator is process-global (see factorize)
+  std::lock_guard<std::mutex> lock(analysis);
+  cholmod_common common;
+  cholmod_start(&common);
+  Eigen::SparseMatrix<double> copy = lower;
+  cholmod_sparse A = Eigen::viewAsCholmod(copy);
+  A.stype = -1;  // the lower triangle of a symmetric matrix
+  cholmod_factor* L = cholmod_analyze(&A, &common);
+  if (!L) {
+    cholmod_finish(&common);
+    throw std::runtime_error("CHOLMOD: cannot order the pattern");
+  }
+  const int* perm = static_cast<const int*>(L->Perm);
+  std::vector<int> ordering(perm, perm + lower.rows());
+  cholmod_free_factor(&L, &common);
+  cholmod_finish(&common);
+  return ordering;
+}
 SpdSolver::~SpdSolver() = default;
 SpdSolver::SpdSolver(SpdSolver&&) noexcept = default;
 SpdSolver& SpdSolver::operator=(SpdSolver&&) noexcept = default;

@@ -5,6 +5,7 @@
 #include <Eigen/SparseCore>
 
 #include <memory>
+#include <vector>
 
 namespace drom::fem {
 
@@ -14,9 +15,15 @@ struct SolverStats {
   int factorizations = 0;
 };
 
+// A fill-reducing ordering of a symmetric pattern (lower triangle given), as CHOLMOD would choose it:
+// ordering[k] = the row/column eliminated k-th.
+std::vector<int> fill_reducing_ordering(const Eigen::SparseMatrix<double>& lower);
+
 class SpdSolver {
  public:
-  SpdSolver();
+  // keep_order: factorize in the matrix's own order (the caller numbered it for low fill, e.g. by
+  // fill_reducing_ordering): no ordering search at analysis.
+  explicit SpdSolver(bool keep_order = false);
   ~SpdSolver();
   SpdSolver(SpdSolver&&) noexcept;
   SpdSolver& operator=(SpdSolver&&) noexcept;

@@ -67,20 +67,18 @@ struct SerialVector {
 
 }  // namespace
 
-PgdSolver::PgdSolver(SeparatedOperator& op, PgdSettings settings) : op_(op), settings_(settings) {}
+PgdSolver::PgdSolver(SeparatedOperator& op, PgdSettings settings) : op_(op), settings_(settings), plane_solver_(true), update_solver_(true) {}
 
 std::array<Eigen::VectorXd, 3> PgdSolver::plane_functions(const ComponentTensors& r, const Eigen::VectorXd& S_in) {
-  const Eigen::Index np = op_.grid().plane_nodes();
-  const auto S = split(S_in, op_.grid().thickness_nodes());
   // The 2D problem with S fixed; its right-hand side is the residual projected on S.
-  Eigen::VectorXd rhs(3 * np);
-  for (int i = 0; i < 3; ++i) rhs.segment(i * np, np).noalias() = r[static_cast<std::size_t>(i)] * S[static_cast<std::size_t>(i)];
+  const auto S = split(S_in, op_.grid().thickness_nodes());
+  const std::array<Eigen::MatrixXd, 3> Z{S[0], S[1], S[2]};
   const auto t0 = std::chrono::steady_clock::now();
-  plane_solver_.factorize(op_.plane_matrix(S));
+  plane_solver_.factorize(op_.plane_matrix(Z));
   ++factorizations_;
-  const Eigen::VectorXd x = plane_solver_.solve(rhs);
+  const auto X = op_.plane_functions(plane_solver_.solve(op_.plane_load(r, Z)), Z);
   plane_seconds_ += seconds_since(t0);
-  return split(x, np);
+  return {X[0].col(0), X[1].col(0), X[2].col(0)};
 }
 
 void PgdSolver::alternate(const ComponentTensors& r, const Eigen::VectorXd& S_in, Eigen::VectorXd& S_out, std::array<Eigen::VectorXd, 3>& R) {
@@ -101,16 +99,9 @@ bool PgdSolver::update_plane_functions(const ComponentTensors& F, SeparatedField
   const auto t0 = std::chrono::steady_clock::now();
   update_solver_.factorize(op_.plane_matrix(basis.Z));
   ++factorizations_;
-  const Eigen::VectorXd b = op_.plane_load(F, basis.Z);
-  const Eigen::VectorXd x = update_solver_.solve(b);
+  basis.X = op_.plane_functions(update_solver_.solve(op_.plane_load(F, basis.Z)), basis.Z);
   plane_seconds_ += seconds_since(t0);
   update_seconds_ += seconds_since(t0);
-  const Eigen::Index n = op_.grid().plane_nodes();
-  Eigen::Index o = 0;
-  for (std::size_t i = 0; i < 3; ++i) {
-    basis.X[i] = Eigen::Map<const Eigen::MatrixXd>(x.data() + o, n, basis.Z[i].cols());
-    o += n * basis.Z[i].cols();
-  }
   r = F;
   op_.subtract_product(basis, r);
   u = std::move(basis);

@@ -72,12 +72,11 @@ class PgdSolver {
 
  private:
   bool update_plane_functions(const ComponentTensors& F, SeparatedField& u, ComponentTensors& r);
-  int updates_ = 0;
-  double update_seconds_ = 0;
-  fem::SpdSolver update_solver_;
   SeparatedOperator& op_;
   PgdSettings settings_;
-  fem::SpdSolver plane_solver_;
+  fem::SpdSolver plane_solver_, update_solver_;  // the mode's 3-function problem; the update's
+  int updates_ = 0;
+  double update_seconds_ = 0;
   double plane_seconds_ = 0;
   int factorizations_ = 0;
 };

@@ -1,6 +1,7 @@
 #include "pgd/separated_operator.hpp"
 
 #include "fem/shape_functions.hpp"
+#include "fem/spd_solver.hpp"
 
 #include <Eigen/Dense>
 
@@ -143,6 +144,18 @@ SeparatedOperator::SeparatedOperator(const TensorGrid& grid, const fem::Material
 
   scalar_diagonal_.resize(static_cast<std::size_t>(n));
   for (int a = 0; a < n; ++a) scalar_diagonal_[static_cast<std::size_t>(a)] = slot(a, a);
+  // The plane's fill-reducing order, once: every 2D matrix is numbered node-major in it.
+  ordering_ = fem::fill_reducing_ordering(Eigen::SparseMatrix<double>(pattern_.triangularView<Eigen::Lower>()));
+  position_.resize(static_cast<std::size_t>(n));
+  for (int k = 0; k < n; ++k) position_[static_cast<std::size_t>(ordering_[static_cast<std::size_t>(k)])] = k;
+  sorted_slots_.resize(static_cast<std::size_t>(n));
+  for (int a = 0; a < n; ++a) {
+    auto& slots = sorted_slots_[static_cast<std::size_t>(a)];
+    for (int p = pattern_.outerIndexPtr()[a]; p < pattern_.outerIndexPtr()[a + 1]; ++p) slots.push_back(p);
+    std::sort(slots.begin(), slots.end(), [&](int x, int y) {
+      return position_[static_cast<std::size_t>(pattern_.innerIndexPtr()[x])] < position_[static_cast<std::size_t>(pattern_.innerIndexPtr()[y])];
+    });
+  }
 
   set_indicator(MaterialIndicator::intact());
 }
@@ -326,95 +339,119 @@ const Eigen::SparseMatrix<double>& SeparatedOperator::plane_matrix(const std::ar
   for (std::size_t i = 0; i < 3; ++i)
     for (Eigen::Index q = 0; q < Z[i].cols(); ++q) functions.emplace_back(i, q);
   const auto F = static_cast<Eigen::Index>(functions.size());
-  const int* outer = pattern_.outerIndexPtr();
   const int* inner = pattern_.innerIndexPtr();
+  auto unknown = [&](int node, Eigen::Index I) { return static_cast<Eigen::Index>(position_[static_cast<std::size_t>(node)]) * F + I; };
 
-  // 1. Pattern: every block (I >= J) holds the scalar pattern, the diagonal blocks their lower half;
-  //    it depends on the number of functions only. Rows come sorted: block I ascending, then row.
+  // 1. Pattern, node-major in the plane's fill-reducing order: the F unknowns of a node are
+  //    consecutive, so each node is a dense block the supernodal factorization takes whole, and the
+  //    order needs no search (SpdSolver keep_order). It depends on the number of functions only.
   if (plane_matrix_functions_ != F) {
     const Eigen::Index size = F * n;
     std::vector<int> col_start(static_cast<std::size_t>(size + 1), 0), rows;
-    std::size_t nnz = 0;
-    for (Eigen::Index J = 0; J < F; ++J)
-      for (int a = 0; a < n; ++a) {
-        col_start[static_cast<std::size_t>(J * n + a)] = static_cast<int>(nnz);
-        for (Eigen::Index I = J; I < F; ++I)
-          for (int p = outer[a]; p < outer[a + 1]; ++p)
-            if (I > J || inner[p] >= a) ++nnz;
+    for (int pass = 0; pass < 2; ++pass) {
+      std::size_t nnz = 0;
+      for (int k = 0; k < n; ++k) {
+        const int a = ordering_[static_cast<std::size_t>(k)];
+        for (Eigen::Index J = 0; J < F; ++J) {
+          const Eigen::Index c = unknown(a, J);
+          if (pass == 0) col_start[static_cast<std::size_t>(c)] = static_cast<int>(nnz);
+          for (int p : sorted_slots_[static_cast<std::size_t>(a)])
+            for (Eigen::Index I = 0; I < F; ++I)
+              if (unknown(inner[p], I) >= c) {
+                if (pass == 1) rows.push_back(static_cast<int>(unknown(inner[p], I)));
+                ++nnz;
+              }
+        }
       }
-    col_start[static_cast<std::size_t>(size)] = static_cast<int>(nnz);
-    rows.reserve(nnz);
-    for (Eigen::Index J = 0; J < F; ++J)
-      for (int a = 0; a < n; ++a)
-        for (Eigen::Index I = J; I < F; ++I)
-          for (int p = outer[a]; p < outer[a + 1]; ++p)
-            if (I > J || inner[p] >= a) rows.push_back(static_cast<int>(I * n + inner[p]));
+      if (pass == 0) {
+        col_start[static_cast<std::size_t>(size)] = static_cast<int>(nnz);
+        rows.reserve(nnz);
+      }
+    }
     plane_matrix_ = Eigen::SparseMatrix<double>(size, size);
-    plane_matrix_.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+    plane_matrix_.resizeNonZeros(static_cast<Eigen::Index>(rows.size()));
     std::copy(col_start.begin(), col_start.end(), plane_matrix_.outerIndexPtr());
     std::copy(rows.begin(), rows.end(), plane_matrix_.innerIndexPtr());
     plane_matrix_functions_ = F;
   }
 
-  // 2. Values, one block column J at a time: the blocks (I, J) are the plane operators combined with
-  //    the thickness coefficients <Z_I, B Z_J> (one matrix product), plus penalty and foundation.
+  // 2. Values, one function J at a time: the blocks (I, J) for every I are the plane operators
+  //    combined with the thickness coefficients <Z_I, B Z_J> (one matrix product), plus penalty and
+  //    foundation.
   const auto P = plane_operators_.cols();
   double* val = plane_matrix_.valuePtr();
-  std::size_t pos = 0;
+  const int* col = plane_matrix_.outerIndexPtr();
   Eigen::MatrixXd coefficients, blocks;
   for (Eigen::Index J = 0; J < F; ++J) {
     const auto [j, qj] = functions[static_cast<std::size_t>(J)];
     const Eigen::VectorXd zj = Z[j].col(qj);
-    coefficients.setZero(P, F - J);
-    for (Eigen::Index I = J; I < F; ++I) {
+    coefficients.setZero(P, F);
+    for (Eigen::Index I = 0; I < F; ++I) {
       const auto [i, qi] = functions[static_cast<std::size_t>(I)];
       const Eigen::VectorXd zi = Z[i].col(qi);
       const std::size_t ij = 3 * i + j;
       for (std::size_t m = 0; m < M; ++m)
         for (int p = 0; p < 9; ++p)
           if (B_nonzero_[m][ij][static_cast<std::size_t>(p)])
-            coefficients(static_cast<Eigen::Index>(9 * m) + p, I - J) = zi.dot(B_[m][ij][static_cast<std::size_t>(p)] * zj);
-      if (i == j && foundation_ > 0) coefficients(P - 1, I - J) = foundation_ * zi.dot(thickness_mass_ * zj);
+            coefficients(static_cast<Eigen::Index>(9 * m) + p, I) = zi.dot(B_[m][ij][static_cast<std::size_t>(p)] * zj);
+      if (i == j && foundation_ > 0) coefficients(P - 1, I) = foundation_ * zi.dot(thickness_mass_ * zj);
     }
     blocks.noalias() = plane_operators_ * coefficients;
     for (const auto& t : penalty_)
-      for (Eigen::Index I = J; I < F; ++I) {
+      for (Eigen::Index I = 0; I < F; ++I) {
         const auto [i, qi] = functions[static_cast<std::size_t>(I)];
         if (static_cast<int>(i) != t.component || i != j) continue;
         const double c = penalty_stiffness_ * Z[i].col(qi).dot(t.thickness.asDiagonal() * zj);
         for (int a = 0; a < n; ++a)
-          if (t.plane[a] != 0) blocks(scalar_diagonal_[static_cast<std::size_t>(a)], I - J) += c * t.plane[a];
+          if (t.plane[a] != 0) blocks(scalar_diagonal_[static_cast<std::size_t>(a)], I) += c * t.plane[a];
       }
-    for (int a = 0; a < n; ++a)
-      for (Eigen::Index I = J; I < F; ++I)
-        for (int p = outer[a]; p < outer[a + 1]; ++p)
-          if (I > J || inner[p] >= a) val[pos++] = blocks(p, I - J);
+    for (int a = 0; a < n; ++a) {
+      const Eigen::Index c = unknown(a, J);
+      int pos = col[c];
+      for (int p : sorted_slots_[static_cast<std::size_t>(a)])
+        for (Eigen::Index I = 0; I < F; ++I)
+          if (unknown(inner[p], I) >= c) val[pos++] = blocks(p, I);
+    }
   }
   // A function with no stiffness in this sub-problem (a component whose thickness function vanishes)
-  // gets a tiny diagonal so the factorization stays defined and returns 0 for it. Only such blocks:
-  // a shift anywhere else would change the operator (measured: relative to the clamps' penalty it
-  // left a 1e-4 residual). The diagonal is each column's first entry.
-  const int* col = plane_matrix_.outerIndexPtr();
+  // gets a tiny diagonal so the factorization stays defined and returns 0 for it. Only such
+  // functions: a shift anywhere else would change the operator (measured: relative to the clamps'
+  // penalty it left a 1e-4 residual). The diagonal is each column's first entry.
   double largest = 0;
   for (Eigen::Index c = 0; c < plane_matrix_.cols(); ++c) largest = std::max(largest, val[col[c]]);
   for (Eigen::Index J = 0; J < F; ++J) {
-    double block_largest = 0;
-    for (Eigen::Index c = J * n; c < (J + 1) * n; ++c) block_largest = std::max(block_largest, val[col[c]]);
-    if (block_largest > 1e-300) continue;
-    for (Eigen::Index c = J * n; c < (J + 1) * n; ++c) val[col[c]] += 1e-14 * largest;
+    double function_largest = 0;
+    for (int a = 0; a < n; ++a) function_largest = std::max(function_largest, val[col[unknown(a, J)]]);
+    if (function_largest > 1e-300) continue;
+    for (int a = 0; a < n; ++a) val[col[unknown(a, J)]] += 1e-14 * largest;
   }
   return plane_matrix_;
 }
 
 Eigen::VectorXd SeparatedOperator::plane_load(const ComponentTensors& F, const std::array<Eigen::MatrixXd, 3>& Z) const {
-  const Eigen::Index n = grid_.plane_nodes();
-  Eigen::VectorXd b(n * (Z[0].cols() + Z[1].cols() + Z[2].cols()));
-  Eigen::Index o = 0;
-  for (std::size_t i = 0; i < 3; ++i) {
-    Eigen::Map<Eigen::MatrixXd>(b.data() + o, n, Z[i].cols()).noalias() = F[i] * Z[i];
-    o += n * Z[i].cols();
-  }
+  return plane_vector({F[0] * Z[0], F[1] * Z[1], F[2] * Z[2]});
+}
+
+Eigen::VectorXd SeparatedOperator::plane_vector(const std::array<Eigen::MatrixXd, 3>& X) const {
+  const Eigen::Index functions = X[0].cols() + X[1].cols() + X[2].cols();
+  Eigen::VectorXd b(grid_.plane_nodes() * functions);
+  Eigen::Index I = 0;
+  for (std::size_t i = 0; i < 3; ++i)
+    for (Eigen::Index q = 0; q < X[i].cols(); ++q, ++I)
+      for (int a = 0; a < grid_.plane_nodes(); ++a) b[position_[static_cast<std::size_t>(a)] * functions + I] = X[i](a, q);
   return b;
+}
+
+std::array<Eigen::MatrixXd, 3> SeparatedOperator::plane_functions(const Eigen::VectorXd& x, const std::array<Eigen::MatrixXd, 3>& Z) const {
+  const Eigen::Index functions = Z[0].cols() + Z[1].cols() + Z[2].cols();
+  std::array<Eigen::MatrixXd, 3> X;
+  Eigen::Index I = 0;
+  for (std::size_t i = 0; i < 3; ++i) {
+    X[i].resize(grid_.plane_nodes(), Z[i].cols());
+    for (Eigen::Index q = 0; q < Z[i].cols(); ++q, ++I)
+      for (int a = 0; a < grid_.plane_nodes(); ++a) X[i](a, q) = x[position_[static_cast<std::size_t>(a)] * functions + I];
+  }
+  return X;
 }
 
 Eigen::MatrixXd SeparatedOperator::thickness_matrix(const std::array<Eigen::VectorXd, 3>& R) const {

@@ -71,14 +71,16 @@ class SeparatedOperator {
   ComponentTensors stress_load(const fem::StressProfile& profile) const;
 
   // 2D operator of the Galerkin problem on (any plane functions) x span(Z_i), component by component:
-  // unknowns X_i (plane_nodes x Z_i.cols()), component 0's columns first, one block of plane_nodes per
-  // column; lower triangle. With one column per component (Z_i = S_i) it is the 2D problem of a new
+  // unknowns X_i (plane_nodes x Z_i.cols()), numbered node-major in a fill-reducing order of the plane
+  // (factorize it with fem::SpdSolver(keep_order = true)); lower triangle. With one column per component (Z_i = S_i) it is the 2D problem of a new
   // mode, sum_ij <S_i, K_ij S_j>; with every thickness function found so far it is the update that
   // re-solves all plane functions at once.
   const Eigen::SparseMatrix<double>& plane_matrix(const std::array<Eigen::MatrixXd, 3>& Z);
   const Eigen::SparseMatrix<double>& plane_matrix(const std::array<Eigen::VectorXd, 3>& S);
-  // Its right-hand side for the load F: the blocks F_i Z_i.
+  // Its right-hand side for the load F (F_i Z_i), and its solution unpacked into the X_i.
   Eigen::VectorXd plane_load(const ComponentTensors& F, const std::array<Eigen::MatrixXd, 3>& Z) const;
+  std::array<Eigen::MatrixXd, 3> plane_functions(const Eigen::VectorXd& x, const std::array<Eigen::MatrixXd, 3>& Z) const;
+  Eigen::VectorXd plane_vector(const std::array<Eigen::MatrixXd, 3>& X) const;  // the inverse of plane_functions
   // 1D operator <R_i, K_ij R_j> on the 3 x thickness_nodes unknowns (dense, symmetric).
   Eigen::MatrixXd thickness_matrix(const std::array<Eigen::VectorXd, 3>& R) const;
   // Galerkin matrix of the single-component functions of a field (component 0's terms first),
@@ -119,6 +121,8 @@ class SeparatedOperator {
   // the 2D matrix's blocks are this times a coefficient matrix, one product per block column.
   Eigen::MatrixXd plane_operators_;
   std::vector<int> scalar_diagonal_;  // nnz index of (a, a) in pattern_
+  std::vector<int> ordering_, position_;  // plane nodes in elimination order, and each node's place in it
+  std::vector<std::vector<int>> sorted_slots_;  // nnz indices of each pattern_ column, rows in elimination order
   Eigen::SparseMatrix<double> plane_matrix_;  // pattern built for plane_matrix_functions_ functions
   Eigen::Index plane_matrix_functions_ = -1;
 };

@@ -40,12 +40,9 @@ void check_restriction(const pgd::TensorGrid& grid, std::array<int, 3> functions
   for (auto& t : Ku) t = -t;
   const Eigen::VectorXd expected = op.plane_load(Ku, u.Z);
 
-  Eigen::VectorXd x(expected.size());
-  Eigen::Index o = 0;
-  for (std::size_t i = 0; i < 3; ++i) {
-    x.segment(o, u.X[i].size()) = Eigen::Map<const Eigen::VectorXd>(u.X[i].data(), u.X[i].size());
-    o += u.X[i].size();
-  }
+  const Eigen::VectorXd x = op.plane_vector(u.X);
+  const auto unpacked = op.plane_functions(x, u.Z);
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ(unpacked[i], u.X[i]);
   const Eigen::SparseMatrix<double>& K2 = op.plane_matrix(u.Z);
   const Eigen::VectorXd got = K2.selfadjointView<Eigen::Lower>() * x;
   // The solver's diagonal shift is 1e-14 of each block: far below this tolerance.
