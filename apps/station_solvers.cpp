@@ -152,6 +152,14 @@ class PgdStation final : public StationSolver {
     std::vector<char> keep(problem_.activity().size());
     for (std::size_t e = 0; e < keep.size(); ++e) keep[e] = problem_.activity()[e] > 0;
     fem::write_vtu(path, part_.mesh, fields, keep);
+    // The separated solution itself beside it: the modes of each profile.
+    const auto& solutions = problem_.solutions();
+    for (std::size_t p = 0; p < solutions.size() && p < displacements.size(); ++p) {
+      const std::string suffix = solutions.size() > 1 ? displacements[p].first.substr(std::string("displacement").size()) : "";
+      auto modes = path;
+      modes.replace_filename(path.stem().string() + "_modes" + suffix + ".h5");
+      pgd::write_modes_hdf5(modes, problem_.grid(), solutions[p]);
+    }
   }
 
   nlohmann::json statistics() const override { return statistics_; }

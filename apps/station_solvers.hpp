@@ -28,7 +28,8 @@ class StationSolver {
   // The unclamped part's shape with these remaining fractions, after best-fit rigid alignment; dofs of
   // nodes that no material holds are 0.
   virtual Eigen::MatrixXd free_shape(const std::vector<double>& activity) = 0;
-  // The state of the last solve (or free_shape) to a .vtu, with these displacement columns.
+  // The state of the last solve (or free_shape) to a .vtu, with these displacement columns (the PGD
+  // also writes its modes beside it: <stem>_modes[_<profile>].h5).
   virtual void write_vtu(const std::filesystem::path& path, const NamedDisplacements& displacements) const = 0;
   // Solver figures for summary.json (seconds, counts); workers' figures are summed.
   virtual nlohmann::json statistics() const = 0;

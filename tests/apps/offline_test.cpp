@@ -88,6 +88,11 @@ TEST(Offline, PgdDatabaseMatchesTheFeDatabaseOnTheSameHex27Mesh) {
   EXPECT_EQ(B1.rows(), a.matrix("B1").rows);
   EXPECT_TRUE(std::filesystem::exists(pgd / "truth.pvd"));
   EXPECT_TRUE(std::filesystem::exists(pgd / "final_free_shape.vtu"));
+  EXPECT_TRUE(std::filesystem::exists(pgd / "final_free_shape_modes.h5"));
+  drom::Hdf5Reader modes(pgd / "final_free_shape_modes.h5");
+  EXPECT_EQ(modes.matrix("X_w").rows, 21u * 21u);  // 10 x 10 Quad9 nodes
+  EXPECT_EQ(modes.matrix("Z_w").rows, 11u);        // 5 Line3 through the thickness
+  EXPECT_EQ(modes.matrix("X_w").cols, modes.matrix("Z_w").cols);
 }
 
 TEST(Offline, PgdRunDoesNotDependOnThreadsOrResumes) {
