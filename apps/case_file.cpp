@@ -38,7 +38,7 @@ void read_part(CaseReader& r, Case& c) {
 void read_solver(CaseReader& r, Case& c) {
   c.solver = r.choice("solver.kind", {"fe", "pgd"}, "fe");
   if (c.solver != "pgd") {
-    for (const char* key : {"solver.residual_tolerance", "solver.fixed_point_tolerance", "solver.max_modes", "solver.max_fixed_point_iterations",
+    for (const char* key : {"solver.residual_tolerance", "solver.increment_tolerance", "solver.fixed_point_tolerance", "solver.max_modes", "solver.max_fixed_point_iterations",
                             "solver.anderson_depth", "solver.max_update_functions", "solver.update_every", "solver.indicator_tolerance", "solver.penalty"})
       if (r.has(key)) r.fail(key, "is a setting of the PGD solver: it needs solver.kind = \"pgd\"");
     return;
@@ -46,6 +46,7 @@ void read_solver(CaseReader& r, Case& c) {
   if (c.shape == "stl") r.fail("solver.kind", "pgd separates the plane from the thickness: it needs a plate or a panel, not an STL part");
   auto& s = c.pgd;
   s.residual_tolerance = r.real("solver.residual_tolerance", Range::open(0, 1), s.residual_tolerance);
+  s.increment_tolerance = r.real("solver.increment_tolerance", Range::open(0, 1), s.increment_tolerance);
   s.fixed_point_tolerance = r.real("solver.fixed_point_tolerance", Range::open(0, 1), s.fixed_point_tolerance);
   s.max_modes = static_cast<int>(r.integer("solver.max_modes", 1, 1000, s.max_modes));
   s.max_fixed_point_iterations = static_cast<int>(r.integer("solver.max_fixed_point_iterations", 1, 1000, s.max_fixed_point_iterations));

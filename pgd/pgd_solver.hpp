@@ -3,7 +3,8 @@
 //   u_n = u_0 + sum_q R_q(u, v) S_q(t), one product at a time; each product by the alternating
 //   fixed point  S -> R (2D problem, S fixed) -> S (1D problem, R fixed), accelerated by SUNDIALS
 //   KINSOL's Anderson mixing (depth 0 = the plain fixed point of the seed);
-//   stop when |r_n| / |r_0| < residual_tolerance (eq. D.12) or at max_modes.
+//   stop when |r_n| / |r_0| < residual_tolerance (eq. D.12) and the last cycle changed the field by less
+//   than increment_tolerance, or at max_modes.
 // The residual r = F - K u is kept as one full-size tensor per component: projections onto S or R
 // are then matrix-vector products, and eq. D.12 is evaluated exactly, at a cost linear in the number
 // of thickness nodes (nothing plane x thickness is ever factorized).
@@ -24,6 +25,9 @@ struct PgdSettings {
   // eq. D.12. Measured on the bench plate (N_z = 10 and 20): a ratio of 1e-2 already puts the
   // displacement within 1.3e-6 of the 3D FE's; 1e-3 leaves a margin.
   double residual_tolerance = 1e-3;
+  // ... and the last enrichment cycle (modes since the previous update, and the update) changed the
+  // field by less than this, relative, in energy norm.
+  double increment_tolerance = 1e-4;
   double fixed_point_tolerance = 1e-3;
   int max_modes = 80;
   int max_fixed_point_iterations = 20;
@@ -49,8 +53,9 @@ struct PgdReport {
   double initial_ratio = 1;                // |F - K u_0| / |F| after the warm start
   std::vector<double> residual_ratio;      // after each added mode
   std::vector<int> mode_iterations;        // fixed-point iterations of each added mode
+  std::vector<double> increment;           // relative change of the field at each mode (inf between updates)
   std::vector<double> energy_decrease;     // potential energy drop brought by each mode (N mm)
-  double final_ratio = 1;
+  double final_ratio = 1, final_increment = 0;
   bool converged = false;
   int updates = 0;                   // plane-function updates
   double update_seconds = 0;         // of which in the updates (included in plane_solve_seconds)

@@ -1,5 +1,7 @@
 #include "pgd/separated_field.hpp"
 
+#include <cmath>
+
 #include "support/hdf5_writer.hpp"
 
 #include <Eigen/Dense>

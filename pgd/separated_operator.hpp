@@ -19,7 +19,9 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <functional>
 #include <vector>
 
@@ -86,6 +88,8 @@ class SeparatedOperator {
   // Galerkin matrix of the single-component functions of a field (component 0's terms first),
   // entry (p, q) = a(phi_p, phi_q).
   Eigen::MatrixXd galerkin_matrix(const SeparatedField& basis) const;
+  // sqrt(a(u, u)), supports included.
+  double energy_norm(const SeparatedField& u) const { return std::sqrt(std::max(0.0, galerkin_matrix(u).sum())); }
 
  private:
   using Values = Eigen::VectorXd;  // on the scalar plane pattern

@@ -205,3 +205,38 @@ TEST(PgdEnrichment, EveryModeLowersTheEnergyAndTheResidualFallsToTolerance) {
               report.final_ratio, rises);
   EXPECT_LT(report.final_ratio, settings.residual_tolerance);
 }
+
+TEST(PgdWarmStart, NextStationFromThePreviousMatchesAColdSolveForLessWork) {
+  // Two successive tool stations: the pocket grows by one element row. Warm-started from the first
+  // station's solution, the second solve lands where a cold solve does (within the D.12 tolerance's
+  // accuracy) with fewer modes and 2D factorizations.
+  const auto grid = pgd::TensorGrid::make(fem::PartShape::plate(200, 150, 6), 10, 8, 5);
+  const fem::StressProfile profile{{2, 4}, {-60, 30}, {-40, 20}};
+  const fem::Mesh mesh = grid.hex27_mesh();
+  const auto pads = bottom_corner_pads(mesh, grid.shape, 25);
+  pgd::PgdSettings settings;
+  pgd::PgdProblem warm(grid, kAluminium, {profile}, settings, 1e8, 1e-12);
+  warm.equilibrate();
+  warm.set_fixed_dofs(pads);
+  pgd::PgdProblem cold(grid, kAluminium, {profile}, settings, 1e8, 1e-12);
+  cold.adopt_equilibrium(warm);
+  cold.set_fixed_dofs(pads);
+
+  warm.set_activity(pocket(grid, 40, 160, 30, 75, 3.7));
+  warm.solve(false);
+  const auto next = pocket(grid, 40, 160, 30, 90, 3.7);
+  warm.set_activity(next);
+  const Eigen::VectorXd u_warm = warm.solve(true).front().cartesian_nodal(grid);
+  cold.set_activity(next);
+  const Eigen::VectorXd u_cold = cold.solve(false).front().cartesian_nodal(grid);
+
+  const auto& w = warm.reports().front();
+  const auto& c = cold.reports().front();
+  const double difference = (u_warm - u_cold).cwiseAbs().maxCoeff() / u_cold.cwiseAbs().maxCoeff();
+  std::printf("warm start: %d modes, %d 2D factorizations, %.3f s; cold: %d modes, %d factorizations, %.3f s; difference %.2e\n", w.modes_added,
+              w.plane_factorizations, w.seconds, c.modes_added, c.plane_factorizations, c.seconds, difference);
+  EXPECT_TRUE(w.converged);
+  EXPECT_GT(w.warm_start_terms, 0);
+  EXPECT_LT(w.plane_factorizations, c.plane_factorizations / 3);
+  EXPECT_LT(difference, 1e-4);
+}
