@@ -39,7 +39,7 @@ void read_solver(CaseReader& r, Case& c) {
   c.solver = r.choice("solver.kind", {"fe", "pgd"}, "fe");
   if (c.solver != "pgd") {
     for (const char* key : {"solver.residual_tolerance", "solver.increment_tolerance", "solver.fixed_point_tolerance", "solver.max_modes", "solver.max_fixed_point_iterations",
-                            "solver.anderson_depth", "solver.max_update_functions", "solver.update_every", "solver.indicator_tolerance", "solver.penalty"})
+                            "solver.anderson_depth", "solver.max_update_functions", "solver.update_every", "solver.warm_start_truncation", "solver.indicator_tolerance", "solver.penalty"})
       if (r.has(key)) r.fail(key, "is a setting of the PGD solver: it needs solver.kind = \"pgd\"");
     return;
   }
@@ -53,6 +53,7 @@ void read_solver(CaseReader& r, Case& c) {
   s.anderson_depth = static_cast<int>(r.integer("solver.anderson_depth", 0, 20, s.anderson_depth));
   s.max_update_functions = static_cast<int>(r.integer("solver.max_update_functions", 0, 300, s.max_update_functions));
   s.update_every = static_cast<int>(r.integer("solver.update_every", 1, 100, s.update_every));
+  s.warm_start_truncation = r.real("solver.warm_start_truncation", Range::open(0, 1), s.warm_start_truncation);
   c.pgd_indicator_tolerance = r.real("solver.indicator_tolerance", Range::open(0, 1), c.pgd_indicator_tolerance);
   c.pgd_penalty = r.real("solver.penalty", Range::closed(1e3, 1e14), c.pgd_penalty);
 }

@@ -132,6 +132,7 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
   //    again), or, when they are too many for it, a Galerkin projection on the previous terms.
   if (warm_start && warm_start->max_terms() > 0) {
     u = *warm_start;
+    u.compress(settings_.warm_start_truncation);
     report.warm_start_terms = u.terms(0) + u.terms(1) + u.terms(2);
   }
   if (report.warm_start_terms > 0 && !update_plane_functions(F, u, r)) {

@@ -99,7 +99,7 @@ TEST(Offline, PgdRunDoesNotDependOnThreadsOrResumes) {
   // Warm starts run within fixed chunks of stations that start cold, so neither the thread count nor
   // an interruption changes what is solved.
   const auto whole = dir("pgd_whole"), parts = dir("pgd_parts");
-  const std::string pgd = kPlate + " --set mesh.element=hex27 --set solver.kind=pgd";
+  const std::string pgd = kPlate + " --set mesh.element=hex27 --set solver.kind=pgd --set path.station_spacing=600";
   ASSERT_EQ(run("truth" + pgd + " --threads 2 --out " + whole.string()), "");
   ASSERT_EQ(run("truth" + pgd + " --threads 1 --stop-after 21 --out " + parts.string()), "");
   ASSERT_EQ(run("truth" + pgd + " --threads 2 --resume --out " + parts.string()), "");
