@@ -70,12 +70,28 @@ struct SerialVector {
 
 PgdSolver::PgdSolver(SeparatedOperator& op, PgdSettings settings) : op_(op), settings_(settings), plane_solver_(true), update_solver_(true) {}
 
+void PgdSolver::factorize(fem::SpdSolver& solver, const Eigen::SparseMatrix<double>& K) {
+  try {
+    solver.factorize(K);
+  } catch (const std::runtime_error&) {
+    // A function living almost only in removed material has ~1e-9 of the stiffness while a clamp's
+    // penalty has 1e8: round-off can make such a 2D sub-problem indefinite. A shift of 1e-12 of the
+    // largest diagonal makes it definite; the residual and the stopping tests still use the true
+    // operator, so only the sub-problem's answer moves, not what the solver accepts.
+    Eigen::SparseMatrix<double> shifted = K;
+    const double largest = shifted.diagonal().maxCoeff();
+    for (Eigen::Index c = 0; c < shifted.cols(); ++c) shifted.coeffRef(c, c) += 1e-12 * largest;
+    solver.factorize(shifted);
+    ++regularized_;
+  }
+}
+
 std::array<Eigen::VectorXd, 3> PgdSolver::plane_functions(const ComponentTensors& r, const Eigen::VectorXd& S_in) {
   // The 2D problem with S fixed; its right-hand side is the residual projected on S.
   const auto S = split(S_in, op_.grid().thickness_nodes());
   const std::array<Eigen::MatrixXd, 3> Z{S[0], S[1], S[2]};
   const auto t0 = std::chrono::steady_clock::now();
-  plane_solver_.factorize(op_.plane_matrix(Z));
+  factorize(plane_solver_, op_.plane_matrix(Z));
   ++factorizations_;
   const auto X = op_.plane_functions(plane_solver_.solve(op_.plane_load(r, Z)), Z);
   plane_seconds_ += seconds_since(t0);
@@ -98,7 +114,7 @@ bool PgdSolver::update_plane_functions(const ComponentTensors& F, SeparatedField
   const int functions = basis.terms(0) + basis.terms(1) + basis.terms(2);
   if (functions == 0 || functions > settings_.max_update_functions) return false;
   const auto t0 = std::chrono::steady_clock::now();
-  update_solver_.factorize(op_.plane_matrix(basis.Z));
+  factorize(update_solver_, op_.plane_matrix(basis.Z));
   ++factorizations_;
   basis.X = op_.plane_functions(update_solver_.solve(op_.plane_load(F, basis.Z)), basis.Z);
   plane_seconds_ += seconds_since(t0);
@@ -116,6 +132,7 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
   updates_ = 0;
   update_seconds_ = 0;
   factorizations_ = 0;
+  regularized_ = 0;
   report = PgdReport{};
   const auto& grid = op_.grid();
   const Eigen::Index nz = grid.thickness_nodes();
@@ -243,6 +260,7 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
   report.seconds = seconds_since(start);
   report.plane_solve_seconds = plane_seconds_;
   report.plane_factorizations = factorizations_;
+  report.regularized_factorizations = regularized_;
   report.updates = updates_;
   report.update_seconds = update_seconds_;
   return u;

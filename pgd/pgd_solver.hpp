@@ -65,6 +65,7 @@ struct PgdReport {
   int updates = 0;                   // plane-function updates
   double update_seconds = 0;         // of which in the updates (included in plane_solve_seconds)
   int plane_factorizations = 0;      // 2D Cholesky factorizations (modes and updates)
+  int regularized_factorizations = 0;  // of which needed a 1e-12 diagonal shift to be definite
   double seconds = 0, plane_solve_seconds = 0;
 };
 
@@ -88,7 +89,8 @@ class PgdSolver {
   int updates_ = 0;
   double update_seconds_ = 0;
   double plane_seconds_ = 0;
-  int factorizations_ = 0;
+  int factorizations_ = 0, regularized_ = 0;
+  void factorize(fem::SpdSolver& solver, const Eigen::SparseMatrix<double>& K);
 };
 
 }  // namespace drom::pgd
