@@ -145,29 +145,13 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
     return u;
   }
 
-  // 1. Warm start: the update on the previous thickness functions (every plane function solved
-  //    again), or, when they are too many for it, a Galerkin projection on the previous terms.
+  // 1. Warm start: the previous solution (its terms above warm_start_truncation) as it stands; the
+  //    update after the first new mode re-solves all its plane functions with the new thickness shape.
   if (warm_start && warm_start->max_terms() > 0) {
     u = *warm_start;
     u.compress(settings_.warm_start_truncation);
     report.warm_start_terms = u.terms(0) + u.terms(1) + u.terms(2);
-  }
-  if (report.warm_start_terms > 0 && !update_plane_functions(F, u, r)) {
-    SeparatedField basis = u;
-    basis.compress(settings_.compression_tolerance);
-    const Eigen::MatrixXd G = op_.galerkin_matrix(basis);
-    Eigen::VectorXd b(G.rows());
-    Eigen::Index o = 0;
-    for (std::size_t i = 0; i < 3; ++i) {
-      const Eigen::MatrixXd XtF = basis.X[i].transpose() * F[i];
-      for (Eigen::Index q = 0; q < basis.X[i].cols(); ++q) b[o++] = XtF.row(q).dot(basis.Z[i].col(q));
-    }
-    const Eigen::VectorXd c = G.ldlt().solve(b);
-    o = 0;
-    for (std::size_t i = 0; i < 3; ++i)
-      for (Eigen::Index q = 0; q < basis.X[i].cols(); ++q) basis.X[i].col(q) *= c[o++];
-    op_.subtract_product(basis, r);
-    u = std::move(basis);
+    op_.subtract_product(u, r);
   }
   double ratio = op_.free_norm(r) / report.load_norm;
   report.initial_ratio = ratio;

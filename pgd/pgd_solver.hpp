@@ -11,8 +11,8 @@
 // Update: after each mode, all plane functions are solved again on the span of the thickness functions
 // found so far (one coupled 2D problem), so a mode only has to bring a new thickness shape; the
 // fields of thin parts have few of them (measured: 5-6 per component to 1e-5 on a machined plate).
-// Warm start: the previous solution's thickness functions are the first update's basis (a Galerkin
-// projection on its terms when they are too many), and enrichment adds what the new state needs.
+// Warm start: the previous solution (its terms above warm_start_truncation) is the starting field; the
+// update after the first new mode re-solves all its plane functions with the new thickness shape.
 #include "fem/spd_solver.hpp"
 #include "pgd/separated_field.hpp"
 #include "pgd/separated_operator.hpp"
