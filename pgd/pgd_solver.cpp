@@ -71,6 +71,7 @@ struct SerialVector {
 PgdSolver::PgdSolver(SeparatedOperator& op, PgdSettings settings) : op_(op), settings_(settings), plane_solver_(true), update_solver_(true) {}
 
 void PgdSolver::factorize(fem::SpdSolver& solver, const Eigen::SparseMatrix<double>& K) {
+  ++factorizations_;
   try {
     solver.factorize(K);
   } catch (const std::runtime_error&) {
@@ -92,7 +93,6 @@ std::array<Eigen::VectorXd, 3> PgdSolver::plane_functions(const ComponentTensors
   const std::array<Eigen::MatrixXd, 3> Z{S[0], S[1], S[2]};
   const auto t0 = std::chrono::steady_clock::now();
   factorize(plane_solver_, op_.plane_matrix(Z));
-  ++factorizations_;
   const auto X = op_.plane_functions(plane_solver_.solve(op_.plane_load(r, Z)), Z);
   plane_seconds_ += seconds_since(t0);
   return {X[0].col(0), X[1].col(0), X[2].col(0)};
@@ -115,7 +115,6 @@ bool PgdSolver::update_plane_functions(const ComponentTensors& F, SeparatedField
   if (functions == 0 || functions > settings_.max_update_functions) return false;
   const auto t0 = std::chrono::steady_clock::now();
   factorize(update_solver_, op_.plane_matrix(basis.Z));
-  ++factorizations_;
   basis.X = op_.plane_functions(update_solver_.solve(op_.plane_load(F, basis.Z)), basis.Z);
   plane_seconds_ += seconds_since(t0);
   update_seconds_ += seconds_since(t0);

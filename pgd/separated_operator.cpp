@@ -172,14 +172,13 @@ void SeparatedOperator::set_indicator(const MaterialIndicator& indicator, double
   }
   const int nz = grid_.thickness_nodes();
   const std::size_t T = terms_.size();
-  A_.assign(static_cast<std::size_t>(M), {});
+  plane_operators_.setZero(pattern_.nonZeros(), 9 * M + 1);
   B_.assign(static_cast<std::size_t>(M), {});
   B_nonzero_.assign(static_cast<std::size_t>(M), {});
   for (int m = 0; m < M; ++m) {
     const auto mm = static_cast<std::size_t>(m);
     for (int p = 0; p < 9; ++p) {
-      Values& A = A_[mm][static_cast<std::size_t>(p)];
-      A = Values::Zero(pattern_.nonZeros());
+      auto A = plane_operators_.col(9 * m + p);
       for (int e = 0; e < grid_.plane_elements(); ++e) {
         const double a = plane_factor_sign_[mm] * plane_factor_[mm][e];
         if (a == 0) continue;
@@ -206,10 +205,8 @@ void SeparatedOperator::set_indicator(const MaterialIndicator& indicator, double
         }
       }
   }
-  plane_operators_.resize(pattern_.nonZeros(), 9 * M + 1);
-  for (int m = 0; m < M; ++m)
-    for (int p = 0; p < 9; ++p) plane_operators_.col(9 * m + p) = A_[static_cast<std::size_t>(m)][static_cast<std::size_t>(p)];
-  plane_operators_.col(9 * M) = plane_mass();
+  // The intact term (m = 0, factor 1, sign +1) of the value-value pair is the plane mass matrix.
+  plane_operators_.col(9 * M) = plane_operator(0, pair(0, 0));
 }
 
 void SeparatedOperator::set_penalty(std::vector<PenaltyTerm> terms, double factor) {
@@ -251,7 +248,7 @@ void SeparatedOperator::multiply_plane(const Values& A, const Eigen::MatrixXd& x
 }
 
 void SeparatedOperator::subtract_product(const SeparatedField& u, ComponentTensors& r, bool with_supports) const {
-  const auto M = A_.size();
+  const auto M = static_cast<std::size_t>(indicator_terms());
   Eigen::MatrixXd AX;
   for (int j = 0; j < 3; ++j) {
     const Eigen::MatrixXd& X = u.X[static_cast<std::size_t>(j)];
@@ -262,7 +259,7 @@ void SeparatedOperator::subtract_product(const SeparatedField& u, ComponentTenso
     Eigen::MatrixXd left(X.rows(), static_cast<Eigen::Index>(9 * M) * Q);
     for (std::size_t m = 0; m < M; ++m)
       for (int p = 0; p < 9; ++p) {
-        multiply_plane(A_[m][static_cast<std::size_t>(p)], X, AX);
+        multiply_plane(plane_operator(m, p), X, AX);
         left.middleCols(static_cast<Eigen::Index>(9 * m + static_cast<std::size_t>(p)) * Q, Q) = AX;
       }
     for (int i = 0; i < 3; ++i) {
@@ -328,13 +325,9 @@ ComponentTensors SeparatedOperator::stress_load(const fem::StressProfile& profil
   return F;
 }
 
-const Eigen::SparseMatrix<double>& SeparatedOperator::plane_matrix(const std::array<Eigen::VectorXd, 3>& S) {
-  return plane_matrix(std::array<Eigen::MatrixXd, 3>{S[0], S[1], S[2]});
-}
-
 const Eigen::SparseMatrix<double>& SeparatedOperator::plane_matrix(const std::array<Eigen::MatrixXd, 3>& Z) {
   const int n = grid_.plane_nodes();
-  const auto M = A_.size();
+  const auto M = static_cast<std::size_t>(indicator_terms());
   std::vector<std::pair<std::size_t, Eigen::Index>> functions;  // (component, column of Z)
   for (std::size_t i = 0; i < 3; ++i)
     for (Eigen::Index q = 0; q < Z[i].cols(); ++q) functions.emplace_back(i, q);
@@ -455,7 +448,7 @@ std::array<Eigen::MatrixXd, 3> SeparatedOperator::plane_functions(const Eigen::V
 }
 
 Eigen::MatrixXd SeparatedOperator::thickness_matrix(const std::array<Eigen::VectorXd, 3>& R) const {
-  const auto M = A_.size();
+  const auto M = static_cast<std::size_t>(indicator_terms());
   const int nz = grid_.thickness_nodes();
   Eigen::MatrixXd K = Eigen::MatrixXd::Zero(3 * nz, 3 * nz);
   Eigen::MatrixXd AR;
@@ -465,7 +458,7 @@ Eigen::MatrixXd SeparatedOperator::thickness_matrix(const std::array<Eigen::Vect
         bool needed = false;
         for (int i = 0; i < 3; ++i) needed = needed || B_nonzero_[m][static_cast<std::size_t>(3 * i + j)][static_cast<std::size_t>(p)];
         if (!needed) continue;
-        multiply_plane(A_[m][static_cast<std::size_t>(p)], R[static_cast<std::size_t>(j)], AR);
+        multiply_plane(plane_operator(m, p), R[static_cast<std::size_t>(j)], AR);
         for (int i = 0; i < 3; ++i) {
           const auto ij = static_cast<std::size_t>(3 * i + j);
           if (!B_nonzero_[m][ij][static_cast<std::size_t>(p)]) continue;
@@ -491,10 +484,16 @@ Eigen::MatrixXd SeparatedOperator::thickness_matrix(const std::array<Eigen::Vect
   return K;
 }
 
-void SeparatedOperator::for_each_factor_pair(const SeparatedField& basis, const FactorVisitor& visit) const {
-  const auto M = A_.size();
+Eigen::MatrixXd SeparatedOperator::galerkin_matrix(const SeparatedField& basis) const {
+  // Every term a(phi_p, phi_q) of two single-component sets factors as (X_i^T A X_j) times (Z_i^T B Z_j).
+  std::array<Eigen::Index, 4> offset{0, 0, 0, 0};
+  for (int i = 0; i < 3; ++i) offset[static_cast<std::size_t>(i + 1)] = offset[static_cast<std::size_t>(i)] + basis.terms(i);
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(offset[3], offset[3]);
+  auto add = [&](std::size_t i, std::size_t j, const Eigen::MatrixXd& plane, const Eigen::MatrixXd& thickness) {
+    G.block(offset[i], offset[j], plane.rows(), plane.cols()) += plane.cwiseProduct(thickness);
+  };
   Eigen::MatrixXd AX;
-  for (std::size_t m = 0; m < M; ++m)
+  for (std::size_t m = 0; m < static_cast<std::size_t>(indicator_terms()); ++m)
     for (int p = 0; p < 9; ++p)
       for (std::size_t j = 0; j < 3; ++j) {
         if (basis.X[j].cols() == 0) continue;
@@ -502,30 +501,21 @@ void SeparatedOperator::for_each_factor_pair(const SeparatedField& basis, const 
         for (std::size_t i = 0; i < 3; ++i) {
           const std::size_t ij = 3 * i + j;
           if (!B_nonzero_[m][ij][static_cast<std::size_t>(p)] || basis.X[i].cols() == 0) continue;
-          if (!computed) multiply_plane(A_[m][static_cast<std::size_t>(p)], basis.X[j], AX), computed = true;
-          visit(i, j, basis.X[i].transpose() * AX, basis.Z[i].transpose() * B_[m][ij][static_cast<std::size_t>(p)] * basis.Z[j]);
+          if (!computed) multiply_plane(plane_operator(m, p), basis.X[j], AX), computed = true;
+          add(i, j, basis.X[i].transpose() * AX, basis.Z[i].transpose() * B_[m][ij][static_cast<std::size_t>(p)] * basis.Z[j]);
         }
       }
   for (const auto& t : penalty_) {
     const auto i = static_cast<std::size_t>(t.component);
     if (basis.X[i].cols() == 0) continue;
-    visit(i, i, penalty_stiffness_ * basis.X[i].transpose() * t.plane.asDiagonal() * basis.X[i], basis.Z[i].transpose() * t.thickness.asDiagonal() * basis.Z[i]);
+    add(i, i, penalty_stiffness_ * basis.X[i].transpose() * t.plane.asDiagonal() * basis.X[i], basis.Z[i].transpose() * t.thickness.asDiagonal() * basis.Z[i]);
   }
   if (foundation_ > 0)
     for (std::size_t i = 0; i < 3; ++i) {
       if (basis.X[i].cols() == 0) continue;
       multiply_plane(plane_mass(), basis.X[i], AX);
-      visit(i, i, foundation_ * basis.X[i].transpose() * AX, basis.Z[i].transpose() * thickness_mass_ * basis.Z[i]);
+      add(i, i, foundation_ * basis.X[i].transpose() * AX, basis.Z[i].transpose() * thickness_mass_ * basis.Z[i]);
     }
-}
-
-Eigen::MatrixXd SeparatedOperator::galerkin_matrix(const SeparatedField& basis) const {
-  std::array<Eigen::Index, 4> offset{0, 0, 0, 0};
-  for (int i = 0; i < 3; ++i) offset[static_cast<std::size_t>(i + 1)] = offset[static_cast<std::size_t>(i)] + basis.terms(i);
-  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(offset[3], offset[3]);
-  for_each_factor_pair(basis, [&](std::size_t i, std::size_t j, const Eigen::MatrixXd& plane, const Eigen::MatrixXd& thick) {
-    G.block(offset[i], offset[j], plane.rows(), plane.cols()) += plane.cwiseProduct(thick);
-  });
   return G;
 }
 

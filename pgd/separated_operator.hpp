@@ -22,7 +22,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <functional>
 #include <vector>
 
 namespace drom::pgd {
@@ -78,7 +77,6 @@ class SeparatedOperator {
   // mode, sum_ij <S_i, K_ij S_j>; with every thickness function found so far it is the update that
   // re-solves all plane functions at once.
   const Eigen::SparseMatrix<double>& plane_matrix(const std::array<Eigen::MatrixXd, 3>& Z);
-  const Eigen::SparseMatrix<double>& plane_matrix(const std::array<Eigen::VectorXd, 3>& S);
   // Its right-hand side for the load F (F_i Z_i), and its solution unpacked into the X_i.
   Eigen::VectorXd plane_load(const ComponentTensors& F, const std::array<Eigen::MatrixXd, 3>& Z) const;
   std::array<Eigen::MatrixXd, 3> plane_functions(const Eigen::VectorXd& x, const std::array<Eigen::MatrixXd, 3>& Z) const;
@@ -92,11 +90,7 @@ class SeparatedOperator {
   double energy_norm(const SeparatedField& u) const { return std::sqrt(std::max(0.0, galerkin_matrix(u).sum())); }
 
  private:
-  using Values = Eigen::VectorXd;  // on the scalar plane pattern
-  // Every term a(phi_i, phi_j) of two single-component sets of a field factors as (X_i^T A X_j) times
-  // (Z_i^T B Z_j); visits each pair of factors (elastic terms, penalty, foundation) once.
-  using FactorVisitor = std::function<void(std::size_t i, std::size_t j, const Eigen::MatrixXd& plane, const Eigen::MatrixXd& thickness)>;
-  void for_each_factor_pair(const SeparatedField& basis, const FactorVisitor& visit) const;
+  using Values = Eigen::Ref<const Eigen::VectorXd>;  // on the scalar plane pattern
   void multiply_plane(const Values& A, const Eigen::MatrixXd& x, Eigen::MatrixXd& y) const;  // y = A x
   int pair(int pa, int pb) const { return 3 * pa + pb; }
 
@@ -112,18 +106,18 @@ class SeparatedOperator {
   std::vector<std::vector<Eigen::Matrix3d>> thickness_element_;
   std::vector<double> plane_factor_sign_;          // +1 for the intact term, -(1 - ersatz) for removed
   std::vector<Eigen::VectorXd> plane_factor_, thickness_factor_;  // per indicator term
-  std::vector<std::array<Values, 9>> A_;           // [m][pair]
   std::vector<std::array<std::array<Eigen::MatrixXd, 9>, 9>> B_;  // [m][3 i + j][pair]
   std::vector<std::array<std::array<bool, 9>, 9>> B_nonzero_;
   std::vector<PenaltyTerm> penalty_;
   double penalty_stiffness_ = 0;
   double foundation_ = 0;
   Eigen::MatrixXd thickness_mass_;
-  // The intact term (m = 0, factor 1, sign +1) of the value-value pair is the plane mass matrix.
-  const Values& plane_mass() const { return A_[0][static_cast<std::size_t>(pair(0, 0))]; }
-  // Every plane operator of the current indicator as one column (9 m + pair), then the plane mass:
-  // the 2D matrix's blocks are this times a coefficient matrix, one product per block column.
+  // Every plane operator of the current indicator as one column (9 m + pair) of values on the scalar
+  // pattern, then the plane mass: the 2D matrix's blocks are this times a coefficient matrix, one
+  // product per block column.
   Eigen::MatrixXd plane_operators_;
+  auto plane_operator(std::size_t m, int p) const { return plane_operators_.col(static_cast<Eigen::Index>(9 * m) + p); }
+  auto plane_mass() const { return plane_operators_.col(plane_operators_.cols() - 1); }
   std::vector<int> scalar_diagonal_;  // nnz index of (a, a) in pattern_
   std::vector<int> ordering_, position_;  // plane nodes in elimination order, and each node's place in it
   std::vector<std::vector<int>> sorted_slots_;  // nnz indices of each pattern_ column, rows in elimination order
