@@ -12,11 +12,16 @@ namespace drom::app {
 
 namespace {
 
-std::vector<int> live_list(const std::vector<char>& live) {
+// Best-fit rigid motion removed from each column, over the nodes that material holds.
+void remove_rigid_motions(const fem::Mesh& mesh, const std::vector<char>& live, Eigen::MatrixXd& U) {
   std::vector<int> nodes;
   for (std::size_t n = 0; n < live.size(); ++n)
     if (live[n]) nodes.push_back(static_cast<int>(n));
-  return nodes;
+  for (Eigen::Index p = 0; p < U.cols(); ++p) {
+    Eigen::VectorXd u = U.col(p);
+    fem::remove_rigid_motion(mesh, nodes, u);
+    U.col(p) = u;
+  }
 }
 
 // ---- 3D finite elements -------------------------------------------------------------------------
@@ -44,14 +49,9 @@ class FeStation final : public StationSolver {
     free_->set_fixed_dofs(fem::isostatic_dofs(part_.mesh, part_.shape, live));
     free_->assemble_and_factorize();
     Eigen::MatrixXd U = free_->solve();
-    const auto nodes = live_list(live);
-    for (Eigen::Index p = 0; p < U.cols(); ++p) {
-      Eigen::VectorXd u = U.col(p);
-      fem::remove_rigid_motion(part_.mesh, nodes, u);
-      for (int d = 0; d < part_.mesh.dof_count(); ++d)
-        if (free_->orphan_dofs()[static_cast<std::size_t>(d)]) u[d] = 0;
-      U.col(p) = u;
-    }
+    remove_rigid_motions(part_.mesh, live, U);
+    for (int d = 0; d < part_.mesh.dof_count(); ++d)
+      if (free_->orphan_dofs()[static_cast<std::size_t>(d)]) U.row(d).setZero();
     last_ = free_.get();
     return U;
   }
@@ -134,14 +134,9 @@ class PgdStation final : public StationSolver {
     Eigen::MatrixXd U = nodal(problem_.solve_free());
     add_reports(statistics_, problem_.reports());
     const auto live = problem_.live_nodes();
-    const auto nodes = live_list(live);
-    for (Eigen::Index p = 0; p < U.cols(); ++p) {
-      Eigen::VectorXd u = U.col(p);
-      fem::remove_rigid_motion(part_.mesh, nodes, u);
-      for (std::size_t n = 0; n < live.size(); ++n)
-        if (!live[n]) u.segment<3>(3 * static_cast<Eigen::Index>(n)).setZero();
-      U.col(p) = u;
-    }
+    remove_rigid_motions(part_.mesh, live, U);
+    for (std::size_t n = 0; n < live.size(); ++n)
+      if (!live[n]) U.middleRows(3 * static_cast<Eigen::Index>(n), 3).setZero();
     return U;
   }
 

@@ -5,7 +5,7 @@
 // PGD's max displacement difference to FE, relative. Prints JSON.
 //   build/bench/pgd_bench [plane_elements=20] [nz list, default 5,10,20,40,80] [fe_max_nz=40] [anderson_depth=3]
 //                         [max_fixed_point_iterations=20] [max_update_functions=45]
-//                         [max_modes=80] [update_every=3] [residual_tolerance=1e-4]
+//                         [max_modes=80] [update_every=3] [residual_tolerance=1e-3]
 // (defaults: pgd::PgdSettings). DROM_PGD_TRACE=1 prints each mode's iterations, residual and energy.
 #include "fem/elastic_problem.hpp"
 #include "fem/node_sets.hpp"

@@ -24,13 +24,12 @@ SpdSolver::SpdSolver(bool keep_order) : impl_(std::make_unique<Impl>()) {
   }
 }
 
-std::vector<int> fill_reducing_ordering(const Eigen::SparseMatrix<double>& lower) {
+std::vector<int> fill_reducing_ordering(Eigen::SparseMatrix<double> lower) {
   static std::mutex analysis;  // METIS's generator is process-global (see factorize)
   std::lock_guard<std::mutex> lock(analysis);
   cholmod_common common;
   cholmod_start(&common);
-  Eigen::SparseMatrix<double> copy = lower;
-  cholmod_sparse A = Eigen::viewAsCholmod(copy);
+  cholmod_sparse A = Eigen::viewAsCholmod(lower);  // CHOLMOD's view needs a mutable matrix: taken by value
   A.stype = -1;  // the lower triangle of a symmetric matrix
   cholmod_factor* L = cholmod_analyze(&A, &common);
   if (!L) {

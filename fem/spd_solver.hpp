@@ -17,7 +17,7 @@ struct SolverStats {
 
 // A fill-reducing ordering of a symmetric pattern (lower triangle given), as CHOLMOD would choose it:
 // ordering[k] = the row/column eliminated k-th.
-std::vector<int> fill_reducing_ordering(const Eigen::SparseMatrix<double>& lower);
+std::vector<int> fill_reducing_ordering(Eigen::SparseMatrix<double> lower);
 
 class SpdSolver {
  public:
