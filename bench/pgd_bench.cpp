@@ -6,6 +6,7 @@
 //   build/bench/pgd_bench [plane_elements=20] [nz list, default 5,10,20,40,80] [fe_max_nz=40] [anderson_depth=3]
 //                         [max_fixed_point_iterations=20] [max_update_functions=45]
 //                         [max_modes=80] [update_every=3] [residual_tolerance=1e-3]
+//                         [increment_tolerance=1e-3] [update_threads=1]
 // (defaults: pgd::PgdSettings). DROM_PGD_TRACE=1 prints each mode's iterations, residual and energy.
 #include "fem/elastic_problem.hpp"
 #include "fem/node_sets.hpp"
@@ -39,10 +40,14 @@ int main(int argc, char** argv) {
   if (argc > 7) settings.max_modes = std::atoi(argv[7]);
   if (argc > 8) settings.update_every = std::atoi(argv[8]);
   if (argc > 9) settings.residual_tolerance = std::atof(argv[9]);
+  if (argc > 10) settings.increment_tolerance = std::atof(argv[10]);
+  if (argc > 11) settings.update_threads = std::atoi(argv[11]);
   const fem::Material material{71700.0, 0.33};
   const fem::StressProfile profile{{2, 4, 6}, {-60, 30, -15}, {-40, 20, -10}};
-  std::printf("{\n  \"plane_elements\": [%d, %d],\n  \"anderson_depth\": %d,\n  \"max_fixed_point_iterations\": %d,\n  \"runs\": [\n", n, n,
-              settings.anderson_depth, settings.max_fixed_point_iterations);
+  std::printf("{\n  \"plane_elements\": [%d, %d],\n  \"anderson_depth\": %d,\n  \"max_fixed_point_iterations\": %d,\n  \"residual_tolerance\": %g,\n"
+              "  \"increment_tolerance\": %g,\n  \"update_every\": %d,\n  \"update_threads\": %d,\n  \"runs\": [\n", n, n,
+              settings.anderson_depth, settings.max_fixed_point_iterations, settings.residual_tolerance, settings.increment_tolerance,
+              settings.update_every, settings.update_threads);
   for (std::size_t r = 0; r < nzs.size(); ++r) {
     const int nz = nzs[r];
     const auto grid = pgd::TensorGrid::make(fem::PartShape::plate(1000, 1000, 10), n, n, nz);

@@ -1,5 +1,6 @@
 #include "pgd/pgd_solver.hpp"
 
+#include "support/kernel_threads.hpp"
 #include "support/resources.hpp"
 
 #include <Eigen/Dense>
@@ -10,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 namespace drom::pgd {
@@ -114,6 +116,8 @@ bool PgdSolver::update_plane_functions(const ComponentTensors& F, SeparatedField
   const int functions = basis.terms(0) + basis.terms(1) + basis.terms(2);
   if (functions == 0 || functions > settings_.max_update_functions) return false;
   const auto t0 = std::chrono::steady_clock::now();
+  std::optional<BlasThreads> threads;
+  if (settings_.update_threads > 1) threads.emplace(settings_.update_threads);
   factorize(update_solver_, op_.plane_matrix(basis.Z));
   basis.X = op_.plane_functions(update_solver_.solve(op_.plane_load(F, basis.Z)), basis.Z);
   plane_seconds_ += seconds_since(t0);

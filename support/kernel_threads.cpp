@@ -36,4 +36,17 @@ SingleThreadedKernels::~SingleThreadedKernels() {
     if (auto set = symbol<SetInt>("omp_set_max_active_levels")) set(omp_levels_);
 }
 
+BlasThreads::BlasThreads(int threads) {
+  if (auto get = symbol<GetInt>("openblas_get_num_threads"))
+    if (auto set = symbol<SetInt>("openblas_set_num_threads")) {
+      previous_ = get();
+      set(threads);
+    }
+}
+
+BlasThreads::~BlasThreads() {
+  if (previous_ > 0)
+    if (auto set = symbol<SetInt>("openblas_set_num_threads")) set(previous_);
+}
+
 }  // namespace drom

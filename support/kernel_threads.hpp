@@ -21,4 +21,18 @@ class SingleThreadedKernels {
   int blas_threads_ = -1, omp_levels_ = -1;
 };
 
+// OpenBLAS threads set to `threads` for a scope, inside a SingleThreadedKernels one: for the few
+// large dense-block factorizations of a solve that runs alone (the PGD's update), where BLAS threads
+// do pay. The setting is process-wide, so only a caller that is the sole solver running may use it.
+class BlasThreads {
+ public:
+  explicit BlasThreads(int threads);
+  ~BlasThreads();
+  BlasThreads(const BlasThreads&) = delete;
+  BlasThreads& operator=(const BlasThreads&) = delete;
+
+ private:
+  int previous_ = -1;
+};
+
 }  // namespace drom
