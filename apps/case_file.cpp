@@ -165,18 +165,15 @@ void read_clamps(CaseReader& r, Case& c) {
 }  // namespace
 
 Case load_case(const std::optional<std::filesystem::path>& path, const std::vector<std::string>& overrides) {
-  std::string text, origin;
-  if (path) {
-    std::ifstream in(*path);
-    if (!in) throw InputError(path->string() + ": cannot open case file");
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    text = ss.str();
-    origin = path->string();
-  } else {
-    text = kDefaultCaseToml;
-    origin = "<embedded default case>";
-  }
+  if (!path) return case_from_text(kDefaultCaseToml, "<embedded default case>", overrides);
+  std::ifstream in(*path);
+  if (!in) throw InputError(path->string() + ": cannot open case file");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return case_from_text(ss.str(), path->string(), overrides);
+}
+
+Case case_from_text(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides) {
   CaseReader r(text, origin);
   for (const auto& o : overrides) r.apply_override(o);
 

@@ -76,6 +76,9 @@ struct Case {
 // Reads a case from a file, or the embedded default (flat plate) when `path` is empty, applies the
 // "key=value" overrides, validates everything. Throws InputError.
 Case load_case(const std::optional<std::filesystem::path>& path, const std::vector<std::string>& overrides);
+// The same from TOML text (a case stored in a database or model); `origin` names it in errors and
+// anchors relative file paths.
+Case case_from_text(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides = {});
 
 // The text of cases/flat_plate.toml, compiled in.
 const char* embedded_default_case();

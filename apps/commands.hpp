@@ -17,6 +17,11 @@ struct CommandOptions {
   int stop_after = -1;   // solve at most this many stations in this invocation, then stop (batch, tests)
   int threads = 0;       // 0: one per hardware thread
   int frames = -1;       // full-field VTK frames; -1: 10 for truth, none for offline
+  // drom reduce (case_path holds the database)
+  double tolerance = 1e-3;          // mm, POD truncation bound
+  double history_tolerance = -1;    // mm, all space-time compressions together; -1: tolerance / 2
+  double profile_scale = -1;        // MPa per unit profile; -1: the case's largest coefficient
+  int max_rank = -1;
 };
 
 int run_command(const CommandOptions& options);    // drom run
@@ -25,5 +30,6 @@ int check_command(const CommandOptions& options);  // drom check
 int removal_command(const CommandOptions& options);  // drom removal
 int offline_command(const CommandOptions& options);  // drom offline
 int truth_command(const CommandOptions& options);    // drom truth
+int reduce_command(const CommandOptions& options);   // drom reduce
 
 }  // namespace drom::app

@@ -23,15 +23,27 @@ int main(int argc, char** argv) {
       {"removal", "compute the material each tool station removes, on the case's mesh", drom::app::removal_command},
       {"offline", "simulate the machining once per unit stress profile: the snapshot database (B1, B2)", drom::app::offline_command},
       {"truth", "simulate the machining for the case's own stress profile, with full fields", drom::app::truth_command},
+      {"reduce", "compress an offline database into the light model the online predictor loads", drom::app::reduce_command},
       {"mesh", "mesh the case's part and write it with its clamps to VTK", drom::app::mesh_command},
       {"check", "validate a case file and print it with every override applied", drom::app::check_command},
   };
   std::vector<std::pair<CLI::App*, const Sub*>> commands;
   for (const auto& sub : subs) {
     CLI::App* cmd = app.add_subcommand(sub.name, sub.help);
-    cmd->add_option("case", case_path, "case file (TOML); see cases/ and docs/case-files.md");
-    cmd->add_option("--set", options.overrides, "override a case value, e.g. --set mesh.nx=20 (repeatable)")->take_all();
-    cmd->add_option("--out", options.out, "output folder")->capture_default_str();
+    const bool reduce = std::string(sub.name) == "reduce";
+    if (reduce) {
+      cmd->add_option("database", case_path, "database.h5 written by drom offline")->required();
+      cmd->add_option("--tol", options.tolerance, "POD truncation: max-norm error bound, mm (seed eq. 2.9)")->capture_default_str()->check(CLI::PositiveNumber);
+      cmd->add_option("--history-tol", options.history_tolerance, "space-time compression of all basis histories together, mm (default: --tol / 2)")
+          ->check(CLI::PositiveNumber);
+      cmd->add_option("--scale", options.profile_scale, "plausible amplitude per unit profile, MPa (default: the case's largest coefficient)")
+          ->check(CLI::PositiveNumber);
+      cmd->add_option("--max-rank", options.max_rank, "cap on the number of POD modes")->check(CLI::PositiveNumber);
+    } else {
+      cmd->add_option("case", case_path, "case file (TOML); see cases/ and docs/case-files.md");
+      cmd->add_option("--set", options.overrides, "override a case value, e.g. --set mesh.nx=20 (repeatable)")->take_all();
+    }
+    cmd->add_option("--out", options.out, reduce ? "model file (.h5), or a folder for model.h5" : "output folder")->capture_default_str();
     cmd->add_flag("--quiet", options.quiet, "no progress or table, only files");
     if (std::string(sub.name) == "offline" || std::string(sub.name) == "truth") {
       cmd->add_flag("--resume", options.resume, "continue the interrupted run in --out (refuses a different case)");

@@ -20,6 +20,10 @@ struct BoundaryFace {
 
 // Faces that belong to exactly one element.
 std::vector<BoundaryFace> boundary_faces(const Mesh& mesh);
+// Every element face (inner ones too, each once) whose nodes all lie in node_set: a surface of the
+// mesh given by its nodes, such as the target machined surface inside the stock. The normal is the
+// first owning element's outward one.
+std::vector<BoundaryFace> faces_within(const Mesh& mesh, const std::vector<int>& node_set);
 
 std::vector<int> nodes_where(const Mesh& mesh, const PointPredicate& predicate);
 // Nodes of the boundary faces whose centroid satisfies the predicate (sorted, unique).

@@ -1,0 +1,250 @@
+// drom reduce: the offline database -> the light model the online predictor loads (design.md §5).
+//   1. read database.h5 (an offline run: one column per unit profile) and the case stored in it;
+//   2. the target surface's faces and the final part's surface, from the database's mesh;
+//   3. the programmed path (tool tip, program time) and, per target node, when the tool cut it;
+//   4. POD + space-time compression (reduce/model_reduction.hpp), written atomically as an HDF5 model;
+//   5. summary.json: rank, bounds, measured max error against the database, sizes.
+#include "apps/case_file.hpp"
+#include "apps/case_setup.hpp"
+#include "apps/commands.hpp"
+#include "apps/summary.hpp"
+#include "fem/node_sets.hpp"
+#include "levelset/toolpath.hpp"
+#include "reduce/model_reduction.hpp"
+#include "support/hdf5_reader.hpp"
+#include "support/input_error.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <limits>
+#include <map>
+
+namespace drom::app {
+
+namespace {
+
+using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+Eigen::MatrixXd read_matrix(const Hdf5Reader& h5, const std::string& name) {
+  const Hdf5Matrix m = h5.matrix(name);
+  return Eigen::Map<const RowMajor>(m.data.data(), static_cast<Eigen::Index>(m.rows), static_cast<Eigen::Index>(m.cols));
+}
+
+fem::Mesh read_mesh(const Hdf5Reader& h5, const std::filesystem::path& file) {
+  fem::Mesh mesh;
+  const std::string element = h5.text_attribute("element");
+  if (element == "hex20") mesh.type = fem::ElementType::Hex20;
+  else if (element == "hex27") mesh.type = fem::ElementType::Hex27;
+  else if (element == "tet10") mesh.type = fem::ElementType::Tet10;
+  else throw InputError(file.string() + ": attribute element: expected hex20, hex27 or tet10, got '" + element + "'");
+  const Eigen::MatrixXd xyz = read_matrix(h5, "node_coordinates"), conn = read_matrix(h5, "connectivity");
+  if (xyz.cols() != 3 || conn.cols() != fem::nodes_per_element(mesh.type))
+    throw InputError(file.string() + ": node_coordinates / connectivity do not match a " + element + " mesh");
+  for (Eigen::Index n = 0; n < xyz.rows(); ++n) mesh.nodes.emplace_back(xyz.row(n).transpose());
+  for (Eigen::Index e = 0; e < conn.rows(); ++e)
+    for (Eigen::Index k = 0; k < conn.cols(); ++k) {
+      const double v = conn(e, k);
+      if (!(v >= 0 && v < static_cast<double>(xyz.rows()))) throw InputError(file.string() + ": connectivity row " + std::to_string(e) + " names a node that does not exist");
+      mesh.connectivity.push_back(static_cast<int>(v));
+    }
+  return mesh;
+}
+
+// Faces as rows of local indices into `nodes` (global -> local through `local`).
+std::vector<int> local_faces(const std::vector<fem::BoundaryFace>& faces, const std::map<int, int>& local) {
+  std::vector<int> out;
+  for (const auto& f : faces)
+    for (int n : f.nodes) out.push_back(local.at(n));
+  return out;
+}
+
+// The programmed path as a polyline of tool-tip positions with their program times.
+Eigen::MatrixXd path_waypoints(const levelset::Toolpath& path, const levelset::PathTimeline& timeline) {
+  std::vector<Eigen::Vector4d> rows;
+  for (std::size_t m = 0; m < path.moves.size(); ++m) {
+    const auto& move = path.moves[m];
+    const auto points = levelset::move_polyline(move, 0.01);
+    double along = 0;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      if (k > 0) along += (points[k] - points[k - 1]).norm();
+      if (k == 0 && !rows.empty()) continue;  // the previous move's end
+      const double t = timeline.time_at_length(timeline.move_start_length(m) + std::min(along, move.length()));
+      rows.emplace_back(points[k].x(), points[k].y(), points[k].z(), t);
+    }
+  }
+  Eigen::MatrixXd w(static_cast<Eigen::Index>(rows.size()), 4);
+  for (std::size_t i = 0; i < rows.size(); ++i) w.row(static_cast<Eigen::Index>(i)) = rows[i].transpose();
+  return w;
+}
+
+// First program time at which the tool, its tip down at the node's altitude, covers the node
+// (horizontal distance <= radius); +inf if it never does.
+double first_cover_time(const Eigen::MatrixXd& path, const std::vector<char>& cutting, const Eigen::Vector3d& node, double radius, double z_tolerance) {
+  for (Eigen::Index i = 0; i + 1 < path.rows(); ++i) {
+    if (!cutting[static_cast<std::size_t>(i)]) continue;
+    const Eigen::Vector2d a = path.row(i).head<2>().transpose(), b = path.row(i + 1).head<2>().transpose(), p = node.head<2>();
+    if (std::min(path(i, 2), path(i + 1, 2)) > node.z() + z_tolerance) continue;  // the tip is not down there
+    const Eigen::Vector2d d = b - a, f = a - p;
+    const double A = d.squaredNorm(), B = 2 * f.dot(d), C = f.squaredNorm() - radius * radius;
+    double lambda;
+    if (C <= 0) lambda = 0;
+    else if (A == 0) continue;
+    else {
+      const double disc = B * B - 4 * A * C;
+      if (disc < 0) continue;
+      lambda = (-B - std::sqrt(disc)) / (2 * A);
+      if (lambda < 0 || lambda > 1) continue;
+    }
+    const double z = path(i, 2) + lambda * (path(i + 1, 2) - path(i, 2));
+    if (z > node.z() + z_tolerance) continue;
+    return path(i, 3) + lambda * (path(i + 1, 3) - path(i, 3));
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
+}  // namespace
+
+int reduce_command(const CommandOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  if (!options.case_path) throw InputError("drom reduce needs a database: drom reduce OUT/database.h5 --tol MM --out MODEL.h5");
+  const std::filesystem::path db_path = *options.case_path;
+  const std::filesystem::path model_path = options.out.extension() == ".h5" ? options.out : options.out / "model.h5";
+  const std::filesystem::path out_dir = model_path.has_parent_path() ? model_path.parent_path() : std::filesystem::path(".");
+  std::filesystem::create_directories(out_dir);
+
+  // 1. The database and its case.
+  const Hdf5Reader h5(db_path);
+  if (h5.text_attribute("kind") != "offline")
+    throw InputError(db_path.string() + ": a '" + h5.text_attribute("kind") + "' database; reduce needs an offline one (one column per unit profile)");
+  const Case c = case_from_text(h5.text_attribute("case"), db_path.string());
+  reduce::SnapshotDatabase db;
+  db.B1 = read_matrix(h5, "B1");
+  db.station_times = read_matrix(h5, "station_time");
+  const Eigen::MatrixXd B2 = read_matrix(h5, "B2");
+  const Eigen::MatrixXd target_ids = read_matrix(h5, "target_nodes"), activity = read_matrix(h5, "final_activity");
+  const fem::Mesh mesh = read_mesh(h5, db_path);
+  const auto nt = static_cast<std::size_t>(target_ids.rows());
+  if (nt == 0 || db.B1.rows() != static_cast<Eigen::Index>(nt) * db.station_times.size())
+    throw InputError(db_path.string() + ": B1 has " + std::to_string(db.B1.rows()) + " rows, expected stations x target nodes");
+  if (B2.rows() != mesh.dof_count() || B2.cols() != db.B1.cols()) throw InputError(db_path.string() + ": B2 is not (3 x nodes) x profiles");
+  if (!db.B1.allFinite() || !B2.allFinite()) throw InputError(db_path.string() + ": B1 or B2 holds NaN or infinite values");
+  if (activity.rows() != mesh.element_count()) throw InputError(db_path.string() + ": final_activity has one value per element expected");
+
+  // 2. Surfaces: the target (faces on the target nodes) and the final part (boundary of what is left).
+  reduce::LightModel model;
+  std::vector<int> target(nt);
+  std::map<int, int> target_local;
+  Eigen::Matrix3Xd target_xyz(3, static_cast<Eigen::Index>(nt));
+  for (std::size_t i = 0; i < nt; ++i) {
+    target[i] = static_cast<int>(target_ids(static_cast<Eigen::Index>(i), 0));
+    if (target[i] < 0 || target[i] >= mesh.node_count()) throw InputError(db_path.string() + ": target_nodes names a node that does not exist");
+    target_local[target[i]] = static_cast<int>(i);
+    target_xyz.col(static_cast<Eigen::Index>(i)) = mesh.nodes[static_cast<std::size_t>(target[i])];
+  }
+  const auto target_faces = fem::faces_within(mesh, target);
+  if (target_faces.empty()) throw InputError(db_path.string() + ": no element face lies on the target surface");
+  model.target = reduce::SurfaceMesh(target_xyz, local_faces(target_faces, target_local), static_cast<int>(target_faces.front().nodes.size()));
+  fem::Mesh kept = mesh;
+  kept.connectivity.clear();
+  for (int e = 0; e < mesh.element_count(); ++e)
+    if (activity(e, 0) > 1e-3) kept.connectivity.insert(kept.connectivity.end(), mesh.element(e).begin(), mesh.element(e).end());
+  const auto shape_faces = fem::boundary_faces(kept);
+  std::map<int, int> shape_local;
+  for (const auto& f : shape_faces)
+    for (int n : f.nodes) shape_local.emplace(n, 0);
+  model.shape_nodes.resize(3, static_cast<Eigen::Index>(shape_local.size()));
+  db.final_shape.resize(3 * static_cast<Eigen::Index>(shape_local.size()), B2.cols());
+  int next = 0;
+  for (auto& [node, index] : shape_local) {
+    index = next++;
+    model.shape_nodes.col(index) = mesh.nodes[static_cast<std::size_t>(node)];
+    db.final_shape.middleRows(3 * index, 3) = B2.middleRows(3 * node, 3);
+  }
+  model.shape_faces = local_faces(shape_faces, shape_local);
+  model.shape_face_nodes = static_cast<int>(shape_faces.front().nodes.size());
+
+  // 3. Path, tool, and when each target node was cut.
+  const PartModel part = build_part(c);
+  const levelset::Toolpath toolpath = build_toolpath(c, part);
+  const levelset::PathTimeline timeline(toolpath);
+  model.path = path_waypoints(toolpath, timeline);
+  std::vector<char> cutting(static_cast<std::size_t>(model.path.rows()), 0);
+  {
+    std::size_t row = 0;
+    for (std::size_t m = 0; m < toolpath.moves.size(); ++m) {
+      const auto count = levelset::move_polyline(toolpath.moves[m], 0.01).size() - (m > 0 ? 1 : 0);
+      for (std::size_t k = 0; k < count; ++k, ++row)
+        if (row > 0) cutting[row - 1] = toolpath.moves[m].cutting();  // segment (row - 1, row) belongs to move m
+    }
+  }
+  const levelset::Tool tool = build_tool(c);
+  model.tool_shape = c.tool_kind == "ball" ? reduce::ToolShape::Ball : reduce::ToolShape::Flat;
+  model.tool_radius = tool.radius;
+  model.pocket_depth = c.pocket_depth;
+  model.target_cut_time.resize(static_cast<Eigen::Index>(nt));
+  const double z_tolerance = 0.02 * c.pocket_depth;
+  for (std::size_t i = 0; i < nt; ++i)
+    model.target_cut_time[static_cast<Eigen::Index>(i)] = first_cover_time(model.path, cutting, target_xyz.col(static_cast<Eigen::Index>(i)), tool.radius, z_tolerance);
+  db.program_start = 0;
+
+  // 4. Reduction.
+  reduce::ReductionSettings settings;
+  settings.tolerance = options.tolerance;
+  settings.history_tolerance = options.history_tolerance >= 0 ? options.history_tolerance : 0.5 * options.tolerance;
+  double largest = 0;
+  for (double v : c.sigma11) largest = std::max(largest, std::abs(v));
+  for (double v : c.sigma22) largest = std::max(largest, std::abs(v));
+  settings.profile_scale = options.profile_scale > 0 ? options.profile_scale : (largest > 0 ? largest : 50.0);
+  settings.max_rank = options.max_rank;
+  const auto report = reduce::reduce_snapshots(db, settings, model);
+  model.case_toml = h5.text_attribute("case");
+  model.database_hash = h5.text_attribute("content_hash");
+  model.write(model_path);
+
+  // 5. Summary.
+  const double model_mb = static_cast<double>(std::filesystem::file_size(model_path)) / 1048576.0;
+  const double db_mb = static_cast<double>(std::filesystem::file_size(db_path)) / 1048576.0;
+  std::size_t never_cut = 0;
+  for (double t : model.target_cut_time) never_cut += !std::isfinite(t);
+  std::vector<double> sigma(model.singular_values.data(), model.singular_values.data() + model.singular_values.size());
+  write_summary(out_dir, {{"command", "reduce"},
+                          {"case", c.name},
+                          {"database", db_path.string()},
+                          {"database_hash", model.database_hash},
+                          {"model", model_path.filename().string()},
+                          {"rank", model.rank()},
+                          {"profiles", db.B1.cols()},
+                          {"profile_scale_mpa", settings.profile_scale},
+                          {"tolerance_mm", settings.tolerance},
+                          {"history_tolerance_mm", settings.history_tolerance},
+                          {"pod_max_bound_mm", model.pod_max_bound},
+                          {"pod_euclidean_bound_mm", model.pod_euclidean_bound},
+                          {"history_bound_mm", model.history_bound},
+                          {"error_bound_mm", model.error_bound()},
+                          {"measured_max_error_mm", report.measured_max_error},
+                          {"history_terms", report.history_terms},
+                          {"singular_values_mm", sigma},
+                          {"target_nodes", nt},
+                          {"target_nodes_never_cut", never_cut},
+                          {"shape_nodes", model.shape_nodes.cols()},
+                          {"model_mb", model_mb},
+                          {"database_mb", db_mb},
+                          {"size_ratio", model_mb / db_mb},
+                          {"time_s", elapsed()},
+                          {"machine", machine_info()},
+                          {"files", {model_path.filename().string(), "summary.json"}}});
+  if (!options.quiet) {
+    std::printf("drom reduce: %s -> %s\n", db_path.string().c_str(), model_path.string().c_str());
+    std::printf("  rank r            %d of %ld profiles (profile scale %.0f MPa)\n", model.rank(), static_cast<long>(db.B1.cols()), settings.profile_scale);
+    std::printf("  error bound       %.3g mm (POD %.3g + histories %.3g; tolerance %.3g + %.3g)\n", model.error_bound(), model.pod_max_bound,
+                model.history_bound, settings.tolerance, settings.history_tolerance);
+    std::printf("  measured max err  %.3g mm against the database\n", report.measured_max_error);
+    std::printf("  size              %.2f MB (database %.1f MB)\n", model_mb, db_mb);
+  }
+  return 0;
+}
+
+}  // namespace drom::app

@@ -1,0 +1,145 @@
+#pragma once
+// The online predictor (design.md §6): laser profiles in, tool-length offsets and the final shape out.
+//
+// Measurement model. Where the tool cut (x, y) at program time t_cut, with commanded tip altitude
+// z_cmd = S0(x, y) + (offset applied at t_cut), a laser point read at program time t is
+//   z = z_cmd + w(x, y, t) - w(x, y, t_cut) + noise,   w = sum_k alpha_k U1_k,
+// so m = z - z_cmd is linear in alpha through the differenced basis U1_k(x, y, t) - U1_k(x, y, t_cut).
+// The fit is Bayesian least squares: normal equations accumulated profile by profile (cost
+// independent of what came before), a Gaussian prior alpha ~ N(0, diag(prior_sd^2)) from the model
+// (a profile with independent coefficients of standard deviation profile_scale), and the posterior
+// covariance (H / sigma^2 + prior^-1)^-1, which gives every prediction its standard deviation.
+//
+// Times are program times: when the tool reaches a point running at the programmed feed. Mapping the
+// controller's clock to it (waypoint edges, dead reckoning) is the synchronizer's job.
+//
+// Threads: one acquisition thread calls add_profile; one control thread calls tool_offset (which
+// keeps the rate limiter's state); any thread may call the const queries. The estimate is published
+// as an immutable snapshot, so a query never waits for a profile being ingested.
+#include "reduce/light_model.hpp"
+
+#include <Eigen/Core>
+
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <vector>
+
+namespace drom::online {
+
+struct MeasuredPoint {
+  double x = 0, y = 0, z = 0;  // part frame, mm; z NaN: the sensor saw nothing
+};
+
+struct ToolPose {
+  Eigen::Vector3d tip = Eigen::Vector3d::Zero();  // programmed tool tip when the profile was taken
+  double applied_offset = 0;                      // tool-length offset in force then (mm)
+};
+
+enum class Programming { ToolTip, ToolCentre };  // where the program's coordinates put the tool
+
+struct PredictorSettings {
+  double noise_sd = 0.05;           // mm: the sensor's noise (sigma of the measurement model)
+  double prior_scale = 1;           // multiplies the model's prior standard deviations
+  double reading_range = 1.0;       // mm: |z - z_cmd| beyond this is not the machined surface (a wall, the stock's top, a glitch)
+  double learning_tolerance = 0.01; // mm: learned once the fit predicts recent points this well (net of noise)
+  int learning_window = 5;          // profiles the learning criterion looks back on
+  double max_offset_rate = 1.0;     // mm/s of program time: rate limit of the commanded offset
+  double path_sample = 2.0;         // mm between the precomputed samples of the path's offsets
+  Programming programming = Programming::ToolTip;
+};
+
+struct ProfileReport {
+  int used = 0, outside = 0, not_yet_cut = 0, invalid = 0, out_of_range = 0;
+  double predictive_rms = 0;  // of the used points against the fit before they were added (mm)
+};
+
+struct Estimate {
+  Eigen::VectorXd alpha;
+  Eigen::MatrixXd covariance;
+  long long points = 0;
+  int profiles = 0;
+  bool learned = false;
+};
+
+struct FinalShape {
+  Eigen::Matrix3Xd nodes;         // nominal positions of the final part's surface nodes
+  Eigen::Matrix3Xd displacement;  // predicted, mm
+  Eigen::Matrix3Xd sd;            // its pointwise standard deviation, mm
+  std::vector<int> faces;
+  int face_nodes = 4;
+};
+
+enum class Verdict { WithinTolerance, StraighteningNeeded, Scrap };
+const char* verdict_name(Verdict v);
+
+struct ShapeTolerances {
+  double tolerance = 0.1;            // mm: |normal displacement| the part may keep
+  double straightening_limit = 1.0;  // mm: beyond this, straightening cannot save it
+  double confidence = 1.96;          // standard deviations added (or removed) before deciding
+};
+
+class Predictor {
+ public:
+  Predictor(reduce::LightModel model, PredictorSettings settings = {});
+
+  // One laser profile read at program time t. Points off the target surface, not yet cut, NaN, or
+  // out of range are dropped and counted.
+  ProfileReport add_profile(double t, const ToolPose& pose, std::span<const MeasuredPoint> points);
+  Estimate estimate() const;
+
+  // Predicted altitude of the target surface at (x, y) and program time t (NaN off the surface), and
+  // its standard deviation.
+  double target_altitude(double x, double y, double t) const;
+  double target_altitude_sd(double x, double y, double t) const;
+  // Offset that puts the tool on the predicted target surface at program time t (the tool where the
+  // program has it then): w for a flat end mill; for a ball end mill the centre rides the surface
+  // offset by R along its normal, w + R (sqrt(1 + |grad S|^2) - sqrt(1 + |grad S0|^2)) (seed figs.
+  // 3.37-3.38). 0 until learned.
+  double predicted_offset(double t) const;
+  // predicted_offset rate-limited from the last value returned (control thread only).
+  double tool_offset(double t);
+  double commanded_altitude(double t, double programmed_z) { return programmed_z + tool_offset(t); }
+
+  FinalShape final_shape() const;
+  Verdict verdict(const ShapeTolerances& tolerances) const;
+
+  const reduce::LightModel& model() const { return model_; }
+  const PredictorSettings& settings() const { return settings_; }
+
+ private:
+  struct Snapshot {
+    Eigen::VectorXd alpha;
+    bool learned = false;
+  };
+  Eigen::RowVectorXd basis_at(const reduce::SurfacePoint& p, double t) const;  // U1_k(x, y, t), k = 1..r
+  double applied_offset_at(double t) const;
+  std::shared_ptr<const Snapshot> snapshot() const { return snapshot_.load(std::memory_order_acquire); }
+
+  reduce::LightModel model_;
+  PredictorSettings settings_;
+  int r_ = 0;
+  Eigen::MatrixXd cut_values_;  // target nodes x r: U1_k(node, t_cut(node))
+  Eigen::VectorXd prior_precision_;
+  // Path samples for the offsets: program time, and per sample U1_k and its x / y derivatives at the
+  // tool's position, plus the nominal surface's slope there (ball end mills).
+  Eigen::VectorXd sample_time_;
+  Eigen::MatrixXd sample_w_, sample_wx_, sample_wy_;  // samples x r
+  Eigen::VectorXd sample_inside_, sample_s0x_, sample_s0y_;
+
+  mutable std::mutex ingest_;
+  Eigen::MatrixXd normal_;  // sum g g^T / sigma^2
+  Eigen::VectorXd rhs_;     // sum g m / sigma^2
+  long long points_ = 0;
+  int profiles_ = 0;
+  std::vector<double> recent_square_error_, recent_count_;  // per recent profile
+  std::vector<std::pair<double, double>> offsets_;          // (program time, applied offset), increasing time
+  bool learned_ = false;
+  std::atomic<std::shared_ptr<const Snapshot>> snapshot_;
+
+  double last_offset_ = 0, last_offset_time_ = 0;
+  bool offset_started_ = false;
+};
+
+}  // namespace drom::online

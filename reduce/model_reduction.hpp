@@ -1,0 +1,41 @@
+#pragma once
+// From the offline databases to the light model's bases (design.md §5):
+//   1. scale B1's unit-profile columns to a plausible amplitude (profile_scale MPa), so tolerances
+//      and bounds are in mm of a plausible profile;
+//   2. POD with the fewest modes whose max-norm bound (seed eq. 2.9) meets `tolerance`;
+//   3. each basis history U1_k, reshaped target nodes x stations, kept as sum_l a_l(x) b_l(t) with
+//      tolerance history_tolerance / r on sigma_k U1_k (so all histories together cost at most
+//      history_tolerance in mm);
+//   4. U2 = B2 V_r D_r^-1 for the final shape, and the prior alpha ~ N(0, D_r^2) (a profile whose
+//      coefficients are independent with standard deviation profile_scale).
+#include "reduce/light_model.hpp"
+
+#include <Eigen/Core>
+
+namespace drom::reduce {
+
+struct SnapshotDatabase {
+  Eigen::MatrixXd B1;           // (stations * target nodes) x profiles, row station * n_target + node
+  Eigen::MatrixXd final_shape;  // (3 * shape nodes) x profiles: B2 on the final part's surface
+  Eigen::VectorXd station_times;  // program time of each station (s)
+  double program_start = 0;       // program time when machining starts (w = 0 there)
+};
+
+struct ReductionSettings {
+  double tolerance = 1e-3;          // mm
+  double history_tolerance = 5e-4;  // mm
+  double profile_scale = 50;        // MPa
+  int max_rank = -1;                // -1: as many as the tolerance needs
+};
+
+struct ReductionReport {
+  double measured_max_error = 0;   // max over database columns, stations, nodes of |model - database| (mm at profile_scale)
+  int history_terms = 0;           // sum over the r histories of their separated terms
+  double seconds = 0;
+};
+
+// Fills `model`'s bases, singular values, bounds and prior from the database (its surfaces, path and
+// tool come from the caller).
+ReductionReport reduce_snapshots(const SnapshotDatabase& db, const ReductionSettings& settings, LightModel& model);
+
+}  // namespace drom::reduce

@@ -1,0 +1,49 @@
+#pragma once
+// A history over a surface, f(node, t), kept as sum_l a_l(node) b_l(t) (design.md §5): the SVD of the
+// nodes x times array truncated by the POD bound, so the separated form is within `tolerance` (max
+// norm, the history's unit) of every stored instant. Between stored instants it is linear in time,
+// as the full history would be; before the first instant it goes linearly to `start_value` at
+// time `start` (0 displacement when the machining starts), and after the last it stays there.
+#include "reduce/pod.hpp"
+
+#include <Eigen/Core>
+
+#include <vector>
+
+namespace drom::reduce {
+
+class SpaceTimeField {
+ public:
+  SpaceTimeField() = default;
+  // history: nodes x times; times increasing. A start time before times[0] adds a zero instant there.
+  SpaceTimeField(const Eigen::MatrixXd& history, const Eigen::VectorXd& times, double tolerance, double start = -1);
+  // From stored factors (a model file).
+  SpaceTimeField(Eigen::MatrixXd space, Eigen::MatrixXd time, Eigen::VectorXd times, double bound);
+
+  int terms() const { return static_cast<int>(space_.cols()); }
+  double bound() const { return bound_; }  // max-norm bound of the truncation at the stored instants
+  const Eigen::MatrixXd& space() const { return space_; }  // nodes x terms: a_l
+  const Eigen::MatrixXd& time() const { return time_; }    // instants x terms: b_l (singular values folded in)
+  const Eigen::VectorXd& times() const { return times_; }
+
+  // b(t): the time factors at t (terms).
+  Eigen::VectorXd time_factors(double t) const;
+  // f at every node at time t (nodes).
+  Eigen::VectorXd at(double t) const { return space_ * time_factors(t); }
+  double at(Eigen::Index node, double t) const { return space_.row(node).dot(time_factors(t)); }
+
+ private:
+  Eigen::MatrixXd space_, time_;
+  Eigen::VectorXd times_;
+  double bound_ = 0;
+};
+
+// Where t falls among increasing instants: the interval i (times[i] <= t <= times[i+1]) and the weight
+// of times[i+1], clamped to the ends.
+struct TimeInterval {
+  Eigen::Index i = 0;
+  double weight = 0;
+};
+TimeInterval locate_time(const Eigen::VectorXd& times, double t);
+
+}  // namespace drom::reduce
