@@ -85,12 +85,26 @@ double Predictor::applied_offset_at(double t) const {
   return it == offsets_.begin() ? 0.0 : std::prev(it)->second;
 }
 
+void Predictor::set_offset(double t, double offset) {
+  // The history stays sorted by time; an entry only where the offset in force changes.
+  if (applied_offset_at(t) == offset) return;
+  const auto at = std::upper_bound(offsets_.begin(), offsets_.end(), t, [](double v, const auto& e) { return v < e.first; });
+  offsets_.emplace(at, t, offset);
+}
+
+void Predictor::record_offset(double t, double offset) {
+  std::lock_guard<std::mutex> lock(ingest_);
+  if (!std::isfinite(t) || !std::isfinite(offset)) throw std::invalid_argument("record_offset: time and offset must be finite");
+  set_offset(t, offset);
+}
+
 ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<const MeasuredPoint> points) {
   ProfileReport report;
   std::lock_guard<std::mutex> lock(ingest_);
-  if (!std::isfinite(t)) throw std::invalid_argument("add_profile: the profile's time is not finite");
-  if (!offsets_.empty() && t < offsets_.back().first) throw std::invalid_argument("add_profile: profiles must come in time order");
-  if (offsets_.empty() || offsets_.back().second != pose.applied_offset) offsets_.emplace_back(t, pose.applied_offset);
+  if (!std::isfinite(t) || !std::isfinite(pose.applied_offset)) throw std::invalid_argument("add_profile: the profile's time or offset is not finite");
+  if (profiles_ > 0 && t < last_profile_time_) throw std::invalid_argument("add_profile: profiles must come in time order");
+  last_profile_time_ = t;
+  set_offset(t, pose.applied_offset);
   const auto snap = snapshot();
 
   // The profile's time factors once, then the differenced basis per touched node, then per face the

@@ -86,7 +86,10 @@ class Predictor {
 
   // One laser profile read at program time t. Points off the target surface, not yet cut, NaN, or
   // out of range are dropped and counted.
+  // pose.applied_offset is taken as in force from t on; where the offset changed between profiles,
+  // record_offset gives the exact instant (the commanded altitude where points were cut depends on it).
   ProfileReport add_profile(double t, const ToolPose& pose, std::span<const MeasuredPoint> points);
+  void record_offset(double t, double offset);
   Estimate estimate() const;
 
   // Predicted altitude of the target surface at (x, y) and program time t (NaN off the surface), and
@@ -115,6 +118,7 @@ class Predictor {
   };
   Eigen::RowVectorXd basis_at(const reduce::SurfacePoint& p, double t) const;  // U1_k(x, y, t), k = 1..r
   double applied_offset_at(double t) const;
+  void set_offset(double t, double offset);
   std::shared_ptr<const Snapshot> snapshot() const { return snapshot_.load(std::memory_order_acquire); }
 
   reduce::LightModel model_;
@@ -133,6 +137,7 @@ class Predictor {
   Eigen::VectorXd rhs_;     // sum g m / sigma^2
   long long points_ = 0;
   int profiles_ = 0;
+  double last_profile_time_ = 0;
   std::vector<double> recent_square_error_, recent_count_;  // per recent profile
   std::vector<std::pair<double, double>> offsets_;          // (program time, applied offset), increasing time
   bool learned_ = false;

@@ -1,0 +1,51 @@
+// The light model file: what is written is what is read, and a wrong file is named in the error.
+#include "reduce/light_model.hpp"
+#include "support/hdf5_writer.hpp"
+#include "support/input_error.hpp"
+#include "tests/reduce/synthetic_model.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+using namespace drom;
+
+TEST(LightModel, RoundTripsThroughItsHdf5File) {
+  const reduce::LightModel m = test::synthetic_model();
+  const auto file = std::filesystem::temp_directory_path() / "drom_light_model_test.h5";
+  m.write(file);
+  const reduce::LightModel back = reduce::LightModel::read(file);
+  ASSERT_EQ(back.rank(), m.rank());
+  EXPECT_EQ(back.target.node_count(), m.target.node_count());
+  EXPECT_EQ(back.target.faces(), m.target.faces());
+  EXPECT_EQ(back.target_cut_time, m.target_cut_time);  // inf (never cut) survives as well
+  for (int k = 0; k < m.rank(); ++k) {
+    EXPECT_EQ(back.histories[static_cast<std::size_t>(k)].space(), m.histories[static_cast<std::size_t>(k)].space());
+    EXPECT_EQ(back.histories[static_cast<std::size_t>(k)].time(), m.histories[static_cast<std::size_t>(k)].time());
+    EXPECT_DOUBLE_EQ(back.histories[static_cast<std::size_t>(k)].at(17, 33.3), m.histories[static_cast<std::size_t>(k)].at(17, 33.3));
+  }
+  EXPECT_EQ(back.final_basis, m.final_basis);
+  EXPECT_EQ(back.path, m.path);
+  EXPECT_EQ(back.prior_sd, m.prior_sd);
+  EXPECT_EQ(back.case_toml, m.case_toml);
+  EXPECT_EQ(back.tool_radius, m.tool_radius);
+  std::filesystem::remove(file);
+}
+
+TEST(LightModel, ReadingAnotherFileNamesItAndWhatIsWrong) {
+  const auto file = std::filesystem::temp_directory_path() / "drom_not_a_model.h5";
+  {
+    Hdf5Writer h5(file);
+    h5.attribute("format", std::string("something else"));
+    h5.commit();
+  }
+  try {
+    reduce::LightModel::read(file);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("format"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(file);
+  EXPECT_THROW(reduce::LightModel::read(file), InputError);  // missing file
+}

@@ -1,0 +1,95 @@
+// The POD's truncation bounds (seed eqs. 2.9, 2.12) and the space-time form of a history.
+#include "reduce/pod.hpp"
+#include "reduce/space_time_field.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+using namespace drom::reduce;
+
+namespace {
+
+// A family whose singular values decay smoothly: Gaussian bumps of varying centre and width, plus a
+// tilt, sampled on 300 points (the seed's chapter 2 family in 1D).
+Eigen::MatrixXd bump_family() {
+  const int n = 300, m = 40;
+  Eigen::MatrixXd A(n, m);
+  for (int j = 0; j < m; ++j) {
+    const double a = 0.2 + 0.6 * j / (m - 1.0), b = 0.05 + 0.1 * ((j * 7) % m) / m;
+    for (int i = 0; i < n; ++i) {
+      const double x = i / (n - 1.0);
+      A(i, j) = 4 * std::exp(-(x - a) * (x - a) / b) + 2 * (0.76 - x) * (0.14 - a);
+    }
+  }
+  return A;
+}
+
+}  // namespace
+
+TEST(Pod, EverySnapshotsTruncationErrorIsWithinTheBound) {
+  const Eigen::MatrixXd A = bump_family();
+  for (double tolerance : {1.0, 1e-2, 1e-4, 1e-6}) {
+    const Pod pod = truncated_pod(A, tolerance);
+    EXPECT_LE(pod.max_bound, tolerance);
+    const Eigen::MatrixXd E = A - pod.modes * (pod.modes.transpose() * A);
+    double worst_max = 0, worst_l2 = 0;
+    for (Eigen::Index j = 0; j < A.cols(); ++j) {
+      EXPECT_LE(E.col(j).cwiseAbs().maxCoeff(), pod.max_bound * (1 + 1e-9) + 1e-12) << "snapshot " << j;
+      EXPECT_LE(E.col(j).norm(), pod.euclidean_bound * (1 + 1e-9) + 1e-12) << "snapshot " << j;
+      worst_max = std::max(worst_max, E.col(j).cwiseAbs().maxCoeff());
+      worst_l2 = std::max(worst_l2, E.col(j).norm());
+    }
+    // The fewest modes: one fewer would break the tolerance.
+    if (pod.rank() > 0) {
+      EXPECT_GT(max_norm_bound(pod.singular_values, pod.rank() - 1), tolerance);
+    }
+    std::printf("tolerance %.0e: r = %d, bound %.2e (measured %.2e), l2 bound %.2e (measured %.2e)\n", tolerance, pod.rank(), pod.max_bound, worst_max,
+                pod.euclidean_bound, worst_l2);
+  }
+}
+
+TEST(Pod, EuclideanToleranceAndRankCap) {
+  const Eigen::MatrixXd A = bump_family();
+  const Pod l2 = truncated_pod(A, 1e-3, PodNorm::Euclidean);
+  const Pod mx = truncated_pod(A, 1e-3, PodNorm::Max);
+  EXPECT_LE(l2.euclidean_bound, 1e-3);
+  EXPECT_LE(l2.rank(), mx.rank());  // the 2-norm bound is the smaller one
+  const Pod capped = truncated_pod(A, 0, PodNorm::Max, 3);
+  EXPECT_EQ(capped.rank(), 3);
+  EXPECT_NEAR(capped.max_bound, capped.singular_values.tail(capped.singular_values.size() - 3).sum(), 1e-12);
+  EXPECT_THROW(truncated_pod(A, std::nan("")), std::invalid_argument);
+  Eigen::MatrixXd bad = A;
+  bad(3, 4) = std::nan("");
+  EXPECT_THROW(truncated_pod(bad, 1e-3), std::invalid_argument);
+}
+
+TEST(SpaceTimeField, SeparatedFormIsWithinItsBoundAndLinearBetweenInstants) {
+  // A history over 200 nodes and 60 instants: three smooth separable parts and a small rough one.
+  const int n = 200, m = 60;
+  Eigen::MatrixXd H(n, m);
+  Eigen::VectorXd times(m);
+  for (int k = 0; k < m; ++k) times[k] = 1.0 + 0.5 * k + 0.1 * std::sin(k);
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < m; ++k) {
+      const double x = i / (n - 1.0), t = times[k] / times[m - 1];
+      H(i, k) = x * t + std::sin(3 * x) * t * t + 0.1 * std::cos(5 * x) * std::sqrt(t) + 1e-5 * std::sin(37.0 * i * k);
+    }
+  const SpaceTimeField f(H, times, 1e-3, 0.0);
+  EXPECT_LE(f.bound(), 1e-3);
+  EXPECT_GE(f.terms(), 3);   // the three smooth parts at least...
+  EXPECT_LT(f.terms(), m);   // ...and not the whole history
+  double worst = 0;
+  for (int k = 0; k < m; ++k) worst = std::max(worst, (f.at(times[k]) - H.col(k)).cwiseAbs().maxCoeff());
+  EXPECT_LE(worst, f.bound() + 1e-12);
+  // Halfway between two instants: the mean of the two (what linear interpolation of the full
+  // history gives), to the same bound.
+  const Eigen::VectorXd mid = f.at(0.5 * (times[10] + times[11])), expected = 0.5 * (H.col(10) + H.col(11));
+  EXPECT_LE((mid - expected).cwiseAbs().maxCoeff(), f.bound() + 1e-12);
+  // Before the first instant it goes linearly to 0 at the start; after the last it stays.
+  EXPECT_NEAR(f.at(17, 0.0), 0.0, 1e-14);
+  EXPECT_NEAR(f.at(17, 0.5 * times[0]), 0.5 * f.at(17, times[0]), 1e-12);
+  EXPECT_NEAR(f.at(17, 1e9), f.at(17, times[m - 1]), 1e-14);
+  std::printf("space-time: %d terms for 200 x 60, bound %.2e, measured %.2e\n", f.terms(), f.bound(), worst);
+}

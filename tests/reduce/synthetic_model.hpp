@@ -1,0 +1,97 @@
+#pragma once
+// A light model built from closed-form histories, for tests that need one without an offline run:
+// a 200 x 100 target floor at z = 8 (10 x 5 Quad9 faces), one-way passes along x every 20 mm with a
+// 12.5 mm flat end mill at 10 mm/s (rapid returns), four basis histories that grow with the machined
+// area, and a smooth final-shape basis. Everything goes through the reduce/ classes that a real model
+// uses (SurfaceMesh, SpaceTimeField from sampled histories).
+#include "reduce/light_model.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace drom::test {
+
+inline reduce::LightModel synthetic_model(double tool_radius = 12.5, reduce::ToolShape shape = reduce::ToolShape::Flat) {
+  const int ex = 10, ey = 5, nx = 2 * ex + 1, ny = 2 * ey + 1;
+  const double lx = 200, ly = 100, floor_z = 8;
+  auto id = [&](int i, int j) { return j * nx + i; };
+  Eigen::Matrix3Xd nodes(3, nx * ny);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) nodes.col(id(i, j)) = Eigen::Vector3d(lx * i / (nx - 1), ly * j / (ny - 1), floor_z);
+  std::vector<int> faces;
+  for (int b = 0; b < ey; ++b)
+    for (int a = 0; a < ex; ++a) {
+      const int i = 2 * a, j = 2 * b;
+      for (int v : {id(i, j), id(i + 2, j), id(i + 2, j + 2), id(i, j + 2), id(i + 1, j), id(i + 2, j + 1), id(i + 1, j + 2), id(i, j + 1), id(i + 1, j + 1)})
+        faces.push_back(v);
+    }
+  reduce::LightModel m;
+  m.target = reduce::SurfaceMesh(nodes, faces, 9);
+
+  // Passes along x at y = 10, 30, ..., 90: 20 s of cutting each, 5 s of rapid return and step.
+  const int passes = 5;
+  const double feed = 10, pass_time = lx / feed, cycle = pass_time + 5;
+  std::vector<Eigen::Vector4d> path;
+  for (int p = 0; p < passes; ++p) {
+    const double y = 10 + 20 * p, t0 = p * cycle;
+    path.emplace_back(0, y, floor_z, t0);
+    path.emplace_back(lx, y, floor_z, t0 + pass_time);
+    path.emplace_back(lx, y, floor_z + 5, t0 + pass_time + 0.5);
+  }
+  m.path.resize(static_cast<Eigen::Index>(path.size()), 4);
+  for (std::size_t i = 0; i < path.size(); ++i) m.path.row(static_cast<Eigen::Index>(i)) = path[i].transpose();
+  const double end = passes * cycle;
+
+  // Cut time: the first pass within the tool radius, when the tool centre reaches x - sqrt(R^2 - dy^2).
+  m.target_cut_time.resize(nodes.cols());
+  for (Eigen::Index n = 0; n < nodes.cols(); ++n) {
+    m.target_cut_time[n] = std::numeric_limits<double>::infinity();
+    for (int p = 0; p < passes; ++p) {
+      const double dy = nodes(1, n) - (10 + 20 * p);
+      if (std::abs(dy) > tool_radius) continue;
+      const double x_enter = std::max(0.0, nodes(0, n) - std::sqrt(tool_radius * tool_radius - dy * dy));
+      m.target_cut_time[n] = p * cycle + x_enter / feed;
+      break;
+    }
+  }
+
+  // Histories sampled every 2.5 s, as an offline run's stations would be.
+  const int stations = static_cast<int>(end / 2.5);
+  Eigen::VectorXd times(stations);
+  for (int s = 0; s < stations; ++s) times[s] = 2.5 * (s + 1);
+  const int r = 4;
+  for (int k = 0; k < r; ++k) {
+    Eigen::MatrixXd H(nodes.cols(), stations);
+    for (int s = 0; s < stations; ++s) {
+      const double tau = times[s] / end;
+      for (Eigen::Index n = 0; n < nodes.cols(); ++n) {
+        const double x = nodes(0, n) / lx, y = nodes(1, n) / ly;
+        const double u = k == 0 ? x * x * tau : k == 1 ? std::sin(M_PI * x) * std::sin(M_PI * y) * tau * tau : k == 2 ? (x - 0.5) * (y - 0.3) * std::sqrt(tau) : std::cos(2 * M_PI * x) * y * tau * (1 - 0.5 * tau);
+        H(n, s) = 0.05 * u;
+      }
+    }
+    m.histories.emplace_back(H, times, 1e-13, 0.0);
+  }
+  m.singular_values = Eigen::VectorXd::LinSpaced(6, 1.0, 0.01);
+  m.right = Eigen::MatrixXd::Identity(6, r);
+  m.prior_sd = Eigen::VectorXd::Ones(r);
+  m.profile_scale = 50;
+  m.shape_nodes = nodes;
+  m.shape_faces = faces;
+  m.shape_face_nodes = 9;
+  m.final_basis.resize(3 * nodes.cols(), r);
+  for (Eigen::Index n = 0; n < nodes.cols(); ++n)
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < r; ++k) {
+        const double x = nodes(0, n) / lx, y = nodes(1, n) / ly;
+        m.final_basis(3 * n + c, k) = (c == 2 ? 0.2 : 0.01) * std::cos((k + 1) * x + c) * std::sin((k + 2) * y + 0.3);
+      }
+  m.tool_shape = shape;
+  m.tool_radius = tool_radius;
+  m.pocket_depth = 2;
+  m.case_toml = "name = \"synthetic\"";
+  m.database_hash = "0";
+  return m;
+}
+
+}  // namespace drom::test
