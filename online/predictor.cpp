@@ -6,7 +6,6 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
-#include <unordered_map>
 
 namespace drom::online {
 
@@ -35,6 +34,17 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
       if (std::isfinite(model_.target_cut_time[i])) cut_values_(i, k) = h.at(i, model_.target_cut_time[i]);
   }
   prior_precision_ = (settings_.prior_scale * model_.prior_sd).array().square().inverse();
+  // A face is cut when its last node is (never, if one of them never is).
+  face_cut_time_.assign(static_cast<std::size_t>(model_.target.face_count()), 0.0);
+  for (int f = 0; f < model_.target.face_count(); ++f)
+    for (int q = 0; q < model_.target.nodes_per_face(); ++q)
+      face_cut_time_[static_cast<std::size_t>(f)] = std::max(face_cut_time_[static_cast<std::size_t>(f)],
+                                                             model_.target_cut_time[model_.target.faces()[static_cast<std::size_t>(f * model_.target.nodes_per_face() + q)]]);
+  node_stamp_.assign(static_cast<std::size_t>(n), 0);
+  face_stamp_.assign(static_cast<std::size_t>(model_.target.face_count()), 0);
+  face_slot_.assign(static_cast<std::size_t>(model_.target.face_count()), -1);
+  node_delta_.setZero(n, r_);
+  for (const auto& h : model_.histories) time_factors_.emplace_back(h.terms());
   normal_ = Eigen::MatrixXd::Zero(r_, r_);
   rhs_ = Eigen::VectorXd::Zero(r_);
 
@@ -109,72 +119,82 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
 
   // The profile's time factors once, then the differenced basis per touched node, then per face the
   // sums of N N^T and N m: the normal equations get D_f^T (sum N N^T) D_f per face, not per point.
-  std::vector<Eigen::VectorXd> b(static_cast<std::size_t>(r_));
-  for (int k = 0; k < r_; ++k) b[static_cast<std::size_t>(k)] = model_.histories[static_cast<std::size_t>(k)].time_factors(t);
-  std::unordered_map<int, Eigen::RowVectorXd> delta;  // node -> U1(node, t) - U1(node, t_cut)
-  struct FaceSums {
-    reduce::SurfacePoint face;
-    Eigen::Matrix<double, 9, 9> NN = Eigen::Matrix<double, 9, 9>::Zero();
-    Eigen::Matrix<double, 9, 1> Nm = Eigen::Matrix<double, 9, 1>::Zero();
-    Eigen::Matrix<double, 9, 1> predicted = Eigen::Matrix<double, 9, 1>::Zero();  // D_f alpha
-  };
-  std::unordered_map<int, FaceSums> faces;
+  // Scratch arrays are members, stamped per profile, so nothing is allocated per point.
+  if (++stamp_ == 0) {
+    std::fill(node_stamp_.begin(), node_stamp_.end(), 0);
+    std::fill(face_stamp_.begin(), face_stamp_.end(), 0);
+    stamp_ = 1;
+  }
+  for (int k = 0; k < r_; ++k) model_.histories[static_cast<std::size_t>(k)].time_factors(t, time_factors_[static_cast<std::size_t>(k)]);
+  touched_.clear();
+  const bool offset_varies = !offsets_.empty();  // otherwise 0 everywhere: no need for t_cut
   double square_error = 0;
+  int hint = -1;  // consecutive points of a profile mostly share a face
   for (const auto& pt : points) {
     if (!std::isfinite(pt.x) || !std::isfinite(pt.y) || !std::isfinite(pt.z)) {
       ++report.invalid;
       continue;
     }
-    const auto p = model_.target.locate(pt.x, pt.y);
+    const auto p = model_.target.locate(pt.x, pt.y, hint);
     if (!p) {
       ++report.outside;
       continue;
     }
-    double t_cut = 0;
-    bool cut = true;
-    for (int q = 0; q < p->count; ++q) {
-      const double tc = model_.target_cut_time[p->nodes[static_cast<std::size_t>(q)]];
-      cut = cut && std::isfinite(tc);
-      t_cut += p->weights[static_cast<std::size_t>(q)] * tc;
-    }
-    if (!cut || t_cut > t) {
+    hint = p->face;
+    // The differenced basis needs every node of the face already cut.
+    if (!(face_cut_time_[p->face] <= t)) {
       ++report.not_yet_cut;
       continue;
     }
-    const double m = pt.z - (model_.target.nominal_altitude(*p) + applied_offset_at(t_cut));
+    double offset = 0;
+    if (offset_varies) {
+      double t_cut = 0;
+      for (int q = 0; q < p->count; ++q) t_cut += p->weights[static_cast<std::size_t>(q)] * model_.target_cut_time[p->nodes[static_cast<std::size_t>(q)]];
+      offset = applied_offset_at(t_cut);
+    }
+    const double m = pt.z - (model_.target.nominal_altitude(*p) + offset);
     if (std::abs(m) > settings_.reading_range) {
       ++report.out_of_range;
       continue;
     }
-    auto [it, fresh] = faces.try_emplace(p->face);
-    FaceSums& f = it->second;
-    if (fresh) {
-      f.face = *p;
+    FaceSums* f;
+    if (face_stamp_[static_cast<std::size_t>(p->face)] != stamp_) {
+      face_stamp_[static_cast<std::size_t>(p->face)] = stamp_;
+      face_slot_[static_cast<std::size_t>(p->face)] = static_cast<int>(touched_.size());
+      if (touched_.size() == face_sums_.size()) face_sums_.emplace_back();
+      touched_.push_back(p->face);
+      f = &face_sums_[touched_.size() - 1];
+      f->face = *p;
+      f->NN.setZero();
+      f->Nm.setZero();
       for (int q = 0; q < p->count; ++q) {
         const int node = p->nodes[static_cast<std::size_t>(q)];
-        auto [d, added] = delta.try_emplace(node);
-        if (added) {
-          d->second.resize(r_);
-          for (int k = 0; k < r_; ++k) d->second[k] = model_.histories[static_cast<std::size_t>(k)].space().row(node).dot(b[static_cast<std::size_t>(k)]) - cut_values_(node, k);
+        if (node_stamp_[static_cast<std::size_t>(node)] != stamp_) {
+          node_stamp_[static_cast<std::size_t>(node)] = stamp_;
+          for (int k = 0; k < r_; ++k)
+            node_delta_(node, k) = model_.histories[static_cast<std::size_t>(k)].space().row(node).dot(time_factors_[static_cast<std::size_t>(k)]) - cut_values_(node, k);
         }
-        f.predicted[q] = d->second.dot(snap->alpha);
+        f->predicted[q] = node_delta_.row(node).dot(snap->alpha);
       }
+      for (int q = p->count; q < 9; ++q) f->predicted[q] = 0;
+    } else {
+      f = &face_sums_[static_cast<std::size_t>(face_slot_[static_cast<std::size_t>(p->face)])];
     }
-    Eigen::Matrix<double, 9, 1> N = Eigen::Matrix<double, 9, 1>::Zero();
-    for (int q = 0; q < p->count; ++q) N[q] = p->weights[static_cast<std::size_t>(q)];
-    f.NN.selfadjointView<Eigen::Lower>().rankUpdate(N);
-    f.Nm += N * m;
-    const double e = m - N.dot(f.predicted);
+    Eigen::Matrix<double, 9, 1> N;
+    for (int q = 0; q < 9; ++q) N[q] = q < p->count ? p->weights[static_cast<std::size_t>(q)] : 0.0;
+    f->NN.noalias() += N * N.transpose();
+    f->Nm += N * m;
+    const double e = m - N.dot(f->predicted);
     square_error += e * e;
     ++report.used;
   }
   const double w = 1 / (settings_.noise_sd * settings_.noise_sd);
-  for (auto& [id, f] : faces) {
+  for (std::size_t i = 0; i < touched_.size(); ++i) {
+    const FaceSums& f = face_sums_[i];
     const int c = f.face.count;
     Eigen::MatrixXd D(c, r_);
-    for (int q = 0; q < c; ++q) D.row(q) = delta[f.face.nodes[static_cast<std::size_t>(q)]];
-    const Eigen::MatrixXd NN = f.NN.topLeftCorner(c, c).selfadjointView<Eigen::Lower>();
-    normal_.noalias() += w * (D.transpose() * NN * D);
+    for (int q = 0; q < c; ++q) D.row(q) = node_delta_.row(f.face.nodes[static_cast<std::size_t>(q)]);
+    normal_.noalias() += w * (D.transpose() * f.NN.topLeftCorner(c, c) * D);
     rhs_.noalias() += w * (D.transpose() * f.Nm.head(c));
   }
   points_ += report.used;

@@ -132,7 +132,22 @@ class Predictor {
   Eigen::MatrixXd sample_w_, sample_wx_, sample_wy_;  // samples x r
   Eigen::VectorXd sample_inside_, sample_s0x_, sample_s0y_;
 
+  std::vector<double> face_cut_time_;  // per target face: when its last node was cut
+
   mutable std::mutex ingest_;
+  // add_profile's scratch (under ingest_): per face touched by the profile, sum N N^T, sum N m and the
+  // current fit's nodal prediction; per touched node, the differenced basis.
+  struct FaceSums {
+    reduce::SurfacePoint face;
+    Eigen::Matrix<double, 9, 9> NN;
+    Eigen::Matrix<double, 9, 1> Nm, predicted;
+  };
+  std::vector<FaceSums> face_sums_;
+  std::vector<int> touched_, face_slot_;
+  std::vector<unsigned> node_stamp_, face_stamp_;
+  unsigned stamp_ = 0;
+  Eigen::MatrixXd node_delta_;  // target nodes x r
+  std::vector<Eigen::VectorXd> time_factors_;
   Eigen::MatrixXd normal_;  // sum g g^T / sigma^2
   Eigen::VectorXd rhs_;     // sum g m / sigma^2
   long long points_ = 0;

@@ -37,10 +37,20 @@ SpaceTimeField::SpaceTimeField(Eigen::MatrixXd space, Eigen::MatrixXd time, Eige
 }
 
 Eigen::VectorXd SpaceTimeField::time_factors(double t) const {
-  if (times_.size() == 0) return Eigen::VectorXd::Zero(terms());
-  if (times_.size() == 1) return time_.row(0).transpose();
-  const auto [i, w] = locate_time(times_, t);
-  return ((1 - w) * time_.row(i) + w * time_.row(i + 1)).transpose();
+  Eigen::VectorXd b(terms());
+  time_factors(t, b);
+  return b;
+}
+
+void SpaceTimeField::time_factors(double t, Eigen::Ref<Eigen::VectorXd> out) const {
+  if (times_.size() == 0) {
+    out.setZero();
+  } else if (times_.size() == 1) {
+    out = time_.row(0).transpose();
+  } else {
+    const auto [i, w] = locate_time(times_, t);
+    out = ((1 - w) * time_.row(i) + w * time_.row(i + 1)).transpose();
+  }
 }
 
 }  // namespace drom::reduce

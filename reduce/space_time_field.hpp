@@ -26,8 +26,10 @@ class SpaceTimeField {
   const Eigen::MatrixXd& time() const { return time_; }    // instants x terms: b_l (singular values folded in)
   const Eigen::VectorXd& times() const { return times_; }
 
-  // b(t): the time factors at t (terms).
+  // b(t): the time factors at t (terms); the second form writes into `out` (sized terms()), for
+  // callers that must not allocate.
   Eigen::VectorXd time_factors(double t) const;
+  void time_factors(double t, Eigen::Ref<Eigen::VectorXd> out) const;
   // f at every node at time t (nodes).
   Eigen::VectorXd at(double t) const { return space_ * time_factors(t); }
   double at(Eigen::Index node, double t) const { return space_.row(node).dot(time_factors(t)); }

@@ -86,11 +86,34 @@ SurfaceMesh::SurfaceMesh(Eigen::Matrix3Xd nodes, std::vector<int> faces, int nod
   nx_ = std::max(1, static_cast<int>(std::ceil((hi.x() - lo.x()) / cell_)) + 1);
   ny_ = std::max(1, static_cast<int>(std::ceil((hi.y() - lo.y()) / cell_)) + 1);
   buckets_.assign(static_cast<std::size_t>(nx_ * ny_), {});
+  boxes_.resize(static_cast<std::size_t>(face_count()));
   for (int f = 0; f < face_count(); ++f) {
     double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
     for (int k = 0; k < per_face_; ++k) {
       const auto p = nodes_.col(faces_[static_cast<std::size_t>(f * per_face_ + k)]);
       xmin = std::min(xmin, p.x()), xmax = std::max(xmax, p.x()), ymin = std::min(ymin, p.y()), ymax = std::max(ymax, p.y());
+    }
+    FaceBox& box = boxes_[static_cast<std::size_t>(f)];
+    const double pad = 1e-9 * span;
+    box.xmin = xmin - pad, box.xmax = xmax + pad, box.ymin = ymin - pad, box.ymax = ymax + pad;
+    // Affine if every node sits where the affine map through the corners puts its reference position.
+    const int* conn = faces_.data() + static_cast<std::size_t>(f) * per_face_;
+    const bool tri = is_triangle(per_face_);
+    const Eigen::Vector2d c0 = nodes_.col(conn[0]).head<2>(), c1 = nodes_.col(conn[1]).head<2>(), c2 = nodes_.col(conn[tri ? 2 : 3]).head<2>();
+    Eigen::Matrix2d A;  // d(x, y)/d(r, s)
+    if (tri) {
+      A.col(0) = c1 - c0, A.col(1) = c2 - c0;
+      box.origin = c0;
+    } else {
+      A.col(0) = 0.5 * (c1 - c0), A.col(1) = 0.5 * (c2 - c0);
+      box.origin = c0 + A.col(0) + A.col(1);
+    }
+    box.affine = std::abs(A.determinant()) > 0;
+    if (box.affine) box.inverse = A.inverse();
+    for (int k = 0; k < per_face_ && box.affine; ++k) {
+      const Eigen::Vector2d rs = box.inverse * (nodes_.col(conn[k]).head<2>() - box.origin);
+      face_shape_functions(per_face_, rs.x(), rs.y(), N, Nr, Ns);
+      box.affine = std::abs(N[k] - 1) < 1e-9;
     }
     const int i0 = std::clamp(static_cast<int>((xmin - x0_) / cell_), 0, nx_ - 1), i1 = std::clamp(static_cast<int>((xmax - x0_) / cell_), 0, nx_ - 1);
     const int j0 = std::clamp(static_cast<int>((ymin - y0_) / cell_), 0, ny_ - 1), j1 = std::clamp(static_cast<int>((ymax - y0_) / cell_), 0, ny_ - 1);
@@ -102,11 +125,17 @@ SurfaceMesh::SurfaceMesh(Eigen::Matrix3Xd nodes, std::vector<int> faces, int nod
 bool SurfaceMesh::inside_face(int f, double x, double y, SurfacePoint& out) const {
   const int n = per_face_;
   const int* conn = faces_.data() + static_cast<std::size_t>(f) * n;
+  const FaceBox& box = boxes_[static_cast<std::size_t>(f)];
+  if (x < box.xmin || x > box.xmax || y < box.ymin || y > box.ymax) return false;
   double N[9], Nr[9], Ns[9];
-  // Newton on the horizontal map (r, s) -> (x, y), from the face's centre.
+  // Newton on the horizontal map (r, s) -> (x, y), from the face's centre (one step for affine faces).
   double r = is_triangle(n) ? 1.0 / 3 : 0, s = r;
   Eigen::Matrix2d J;
-  for (int it = 0; it < 12; ++it) {
+  if (box.affine) {
+    const Eigen::Vector2d rs = box.inverse * (Eigen::Vector2d(x, y) - box.origin);
+    r = rs.x(), s = rs.y();
+  }
+  for (int it = 0; it < 12 && !box.affine; ++it) {
     face_shape_functions(n, r, s, N, Nr, Ns);
     double fx = -x, fy = -y;
     J.setZero();
@@ -126,12 +155,17 @@ bool SurfaceMesh::inside_face(int f, double x, double y, SurfacePoint& out) cons
   const bool inside = is_triangle(n) ? (r >= -tol && s >= -tol && r + s <= 1 + tol) : (std::abs(r) <= 1 + tol && std::abs(s) <= 1 + tol);
   if (!inside) return false;
   face_shape_functions(n, r, s, N, Nr, Ns);
-  J.setZero();
-  for (int k = 0; k < n; ++k) {
-    const auto p = nodes_.col(conn[k]);
-    J(0, 0) += Nr[k] * p.x(), J(0, 1) += Ns[k] * p.x(), J(1, 0) += Nr[k] * p.y(), J(1, 1) += Ns[k] * p.y();
+  Eigen::Matrix2d Jinv;  // d(r, s)/d(x, y)
+  if (box.affine) {
+    Jinv = box.inverse;
+  } else {
+    J.setZero();
+    for (int k = 0; k < n; ++k) {
+      const auto p = nodes_.col(conn[k]);
+      J(0, 0) += Nr[k] * p.x(), J(0, 1) += Ns[k] * p.x(), J(1, 0) += Nr[k] * p.y(), J(1, 1) += Ns[k] * p.y();
+    }
+    Jinv = J.inverse();
   }
-  const Eigen::Matrix2d Jinv = J.inverse();  // d(r, s)/d(x, y)
   out.face = f;
   out.count = n;
   for (int k = 0; k < n; ++k) {
@@ -144,11 +178,12 @@ bool SurfaceMesh::inside_face(int f, double x, double y, SurfacePoint& out) cons
   return true;
 }
 
-std::optional<SurfacePoint> SurfaceMesh::locate(double x, double y) const {
+std::optional<SurfacePoint> SurfaceMesh::locate(double x, double y, int hint) const {
   if (buckets_.empty() || !std::isfinite(x) || !std::isfinite(y)) return std::nullopt;
+  SurfacePoint p;
+  if (hint >= 0 && hint < face_count() && inside_face(hint, x, y, p)) return p;
   const int i = static_cast<int>(std::floor((x - x0_) / cell_)), j = static_cast<int>(std::floor((y - y0_) / cell_));
   if (i < 0 || j < 0 || i >= nx_ || j >= ny_) return std::nullopt;
-  SurfacePoint p;
   for (int f : buckets_[static_cast<std::size_t>(j * nx_ + i)])
     if (inside_face(f, x, y, p)) return p;
   return std::nullopt;

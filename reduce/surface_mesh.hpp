@@ -34,7 +34,8 @@ class SurfaceMesh {
   const std::vector<int>& faces() const { return faces_; }
 
   // The face under (x, y) and the shape functions there; empty outside the surface's projection.
-  std::optional<SurfacePoint> locate(double x, double y) const;
+  // `hint`: a face to try first (the previous point's, for points along a profile).
+  std::optional<SurfacePoint> locate(double x, double y, int hint = -1) const;
   // Interpolation of a nodal field (node_count rows) at a located point.
   template <class Field>
   auto interpolate(const SurfacePoint& p, const Field& f) const {
@@ -46,7 +47,16 @@ class SurfaceMesh {
 
  private:
   bool inside_face(int face, double x, double y, SurfacePoint& out) const;
+  struct FaceBox {
+    double xmin, xmax, ymin, ymax;
+    // Faces whose horizontal map is affine (straight sides, midsides at mid-edge: every face of a
+    // structured plate mesh) are inverted in one step: (r, s) = inverse (x - origin).
+    bool affine = false;
+    Eigen::Vector2d origin;
+    Eigen::Matrix2d inverse;
+  };
   Eigen::Matrix3Xd nodes_;
+  std::vector<FaceBox> boxes_;
   std::vector<int> faces_;
   int per_face_ = 0;
   // Uniform bucket grid over the projection: faces whose bounding box meets each cell.

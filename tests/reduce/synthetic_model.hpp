@@ -89,8 +89,8 @@ inline reduce::LightModel synthetic_model(double tool_radius = 12.5, reduce::Too
   m.tool_shape = shape;
   m.tool_radius = tool_radius;
   m.pocket_depth = 2;
-  m.case_toml = "name = \"synthetic\"";
-  m.database_hash = "0";
+  m.case_toml = std::string("name = \"synthetic\"");
+  m.database_hash = std::string("synthetic");
   return m;
 }
 
