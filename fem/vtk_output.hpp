@@ -22,6 +22,11 @@ struct VtuFields {
 // Writes the elements whose `keep` flag is set (empty: all) with their fields; atomic.
 void write_vtu(const std::filesystem::path& path, const Mesh& mesh, const VtuFields& fields, const std::vector<char>& keep = {});
 
+// A surface (3 x n nodes, faces of 3, 4, 6, 8 or 9 nodes in VTK order) with point and cell fields;
+// atomic. For the target surface, the final part's surface and predicted shapes.
+void write_surface_vtu(const std::filesystem::path& path, const Eigen::Matrix3Xd& nodes, const std::vector<int>& faces, int nodes_per_face,
+                       const VtuFields& fields);
+
 class ElasticProblem;
 
 // The problem's current state: the cells that still hold material, the named displacement fields,

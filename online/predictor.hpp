@@ -37,8 +37,6 @@ struct ToolPose {
   double applied_offset = 0;                      // tool-length offset in force then (mm)
 };
 
-enum class Programming { ToolTip, ToolCentre };  // where the program's coordinates put the tool
-
 struct PredictorSettings {
   double noise_sd = 0.05;           // mm: the sensor's noise (sigma of the measurement model)
   double prior_scale = 1;           // multiplies the model's prior standard deviations
@@ -47,7 +45,6 @@ struct PredictorSettings {
   int learning_window = 5;          // profiles the learning criterion looks back on
   double max_offset_rate = 1.0;     // mm/s of program time: rate limit of the commanded offset
   double path_sample = 2.0;         // mm between the precomputed samples of the path's offsets
-  Programming programming = Programming::ToolTip;
 };
 
 struct ProfileReport {
@@ -99,7 +96,8 @@ class Predictor {
   // Offset that puts the tool on the predicted target surface at program time t (the tool where the
   // program has it then): w for a flat end mill; for a ball end mill the centre rides the surface
   // offset by R along its normal, w + R (sqrt(1 + |grad S|^2) - sqrt(1 + |grad S0|^2)) (seed figs.
-  // 3.37-3.38). 0 until learned.
+  // 3.37-3.38). The vertical offset is the same whether the program gives the tool tip or the ball's
+  // centre: add it to whichever the program gives. 0 until learned.
   double predicted_offset(double t) const;
   // predicted_offset rate-limited from the last value returned (control thread only).
   double tool_offset(double t);

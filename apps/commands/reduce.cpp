@@ -3,12 +3,14 @@
 //   2. the target surface's faces and the final part's surface, from the database's mesh;
 //   3. the programmed path (tool tip, program time) and, per target node, when the tool cut it;
 //   4. POD + space-time compression (reduce/model_reduction.hpp), written atomically as an HDF5 model;
-//   5. summary.json: rank, bounds, measured max error against the database, sizes.
+//   5. VTK of the modes (one standard deviation of the prior each), for ParaView;
+//   6. summary.json: rank, bounds, measured max error against the database, sizes.
 #include "apps/case_file.hpp"
 #include "apps/case_setup.hpp"
 #include "apps/commands.hpp"
 #include "apps/summary.hpp"
 #include "fem/node_sets.hpp"
+#include "fem/vtk_output.hpp"
 #include "levelset/toolpath.hpp"
 #include "reduce/model_reduction.hpp"
 #include "support/hdf5_reader.hpp"
@@ -204,7 +206,25 @@ int reduce_command(const CommandOptions& options) {
   model.database_hash = h5.text_attribute("content_hash");
   model.write(model_path);
 
-  // 5. Summary.
+  // 5. Pictures: the target surface with each basis history at the last station and the cut times,
+  //    and the final part's surface with each final-shape mode (warp by vector in ParaView).
+  {
+    fem::VtuFields target_fields, shape_fields;
+    std::vector<double> cut(model.target_cut_time.data(), model.target_cut_time.data() + model.target_cut_time.size());
+    for (double& t : cut)
+      if (!std::isfinite(t)) t = -1;
+    target_fields.point_scalars.emplace_back("cut_time_s", cut);
+    const double t_end = db.station_times[db.station_times.size() - 1];
+    for (int k = 0; k < model.rank(); ++k) {
+      const Eigen::VectorXd u = model.histories[static_cast<std::size_t>(k)].at(t_end) * model.prior_sd[k];
+      target_fields.point_scalars.emplace_back("U1_" + std::to_string(k + 1) + "_end_mm", std::vector<double>(u.data(), u.data() + u.size()));
+      shape_fields.point_vectors.emplace_back("U2_" + std::to_string(k + 1) + "_mm", model.final_basis.col(k) * model.prior_sd[k]);
+    }
+    fem::write_surface_vtu(out_dir / "target_modes.vtu", model.target.nodes(), model.target.faces(), model.target.nodes_per_face(), target_fields);
+    fem::write_surface_vtu(out_dir / "final_shape_modes.vtu", model.shape_nodes, model.shape_faces, model.shape_face_nodes, shape_fields);
+  }
+
+  // 6. Summary.
   const double model_mb = static_cast<double>(std::filesystem::file_size(model_path)) / 1048576.0;
   const double db_mb = static_cast<double>(std::filesystem::file_size(db_path)) / 1048576.0;
   std::size_t never_cut = 0;
@@ -235,7 +255,7 @@ int reduce_command(const CommandOptions& options) {
                           {"size_ratio", model_mb / db_mb},
                           {"time_s", elapsed()},
                           {"machine", machine_info()},
-                          {"files", {model_path.filename().string(), "summary.json"}}});
+                          {"files", {model_path.filename().string(), "target_modes.vtu", "final_shape_modes.vtu", "summary.json"}}});
   if (!options.quiet) {
     std::printf("drom reduce: %s -> %s\n", db_path.string().c_str(), model_path.string().c_str());
     std::printf("  rank r            %d of %ld profiles (profile scale %.0f MPa)\n", model.rank(), static_cast<long>(db.B1.cols()), settings.profile_scale);

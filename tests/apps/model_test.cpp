@@ -9,6 +9,10 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
 
 #include <Eigen/Dense>
 
@@ -101,6 +105,15 @@ TEST_F(ModelOnARealDatabase, ReduceMeetsItsBoundAndIsSmallerThanTheDatabase) {
   const auto model = drom::reduce::LightModel::read(out / "model.h5");
   EXPECT_EQ(model.rank(), s["rank"].get<int>());
   EXPECT_GT(model.rank(), 0);
+  // The pictures: the target surface with one history per mode, the final surface with one vector each.
+  for (const char* name : {"target_modes.vtu", "final_shape_modes.vtu"}) {
+    vtkNew<vtkXMLUnstructuredGridReader> reader;
+    reader->SetFileName((out / name).c_str());
+    reader->Update();
+    vtkUnstructuredGrid* grid = reader->GetOutput();
+    EXPECT_GT(grid->GetNumberOfCells(), 0) << name;
+    EXPECT_EQ(grid->GetPointData()->GetNumberOfArrays(), std::string(name) == "target_modes.vtu" ? model.rank() + 1 : model.rank()) << name;
+  }
 }
 
 TEST_F(ModelOnARealDatabase, PredictorRecoversAProfileInsideTheBasis) {
