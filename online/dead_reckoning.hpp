@@ -1,0 +1,36 @@
+#pragma once
+// Position synchronization (design.md §7; seed §2.2.5.2, fig. 2.26): the controller raises an edge
+// when the tool passes chosen waypoints; between edges the tool's progress is estimated from the last
+// edge at the programmed feed, along the programmed path, and never past the next synchronized
+// waypoint. Everything downstream (the predictor, the sensor's believed positions) works in program
+// time: the time at which the program, run at its programmed feed, reaches a point.
+#include <Eigen/Core>
+
+#include <vector>
+
+namespace drom::online {
+
+class DeadReckoning {
+ public:
+  // path: waypoints x, y, z, program time (increasing); sync: indices of the waypoints that raise an
+  // edge (sorted).
+  DeadReckoning(Eigen::MatrixXd path, std::vector<int> sync);
+
+  // The controller's edge for synchronized waypoint `waypoint`, received at clock time `clock`.
+  void edge(int waypoint, double clock);
+  // Estimated program time at clock time `clock` (before any edge: the clock itself).
+  double program_time(double clock) const;
+  Eigen::Vector3d position(double clock) const { return position_at_program_time(program_time(clock)); }
+  Eigen::Vector3d position_at_program_time(double t) const;
+
+  const Eigen::MatrixXd& path() const { return path_; }
+  const std::vector<int>& sync() const { return sync_; }
+
+ private:
+  Eigen::MatrixXd path_;
+  std::vector<int> sync_;
+  int last_ = -1;             // index into sync_ of the last edge
+  double last_clock_ = 0;
+};
+
+}  // namespace drom::online
