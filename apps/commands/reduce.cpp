@@ -15,6 +15,8 @@
 #include "reduce/model_reduction.hpp"
 #include "support/hdf5_reader.hpp"
 #include "support/input_error.hpp"
+#include "support/png_plot.hpp"
+#include "support/atomic_file.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -224,6 +226,23 @@ int reduce_command(const CommandOptions& options) {
     fem::write_surface_vtu(out_dir / "final_shape_modes.vtu", model.shape_nodes, model.shape_faces, model.shape_face_nodes, shape_fields);
   }
 
+  // The singular values against the tolerance: where the POD stopped, and why.
+  {
+    std::string csv = "i,singular_value_mm,bound_if_truncated_here_mm,kept\n";
+    PlotSeries values{"singular value", {}, {}, "o-"}, bounds{"bound if truncated after i", {}, {}, "s--"};
+    for (Eigen::Index i = 0; i < model.singular_values.size(); ++i) {
+      const double bound = reduce::max_norm_bound(model.singular_values, static_cast<int>(i + 1));
+      char line[128];
+      std::snprintf(line, sizeof line, "%ld,%.9e,%.9e,%d\n", static_cast<long>(i + 1), model.singular_values[i], bound, i < model.rank() ? 1 : 0);
+      csv += line;
+      values.x.push_back(static_cast<double>(i + 1)), values.y.push_back(model.singular_values[i]);
+      bounds.x.push_back(static_cast<double>(i + 1)), bounds.y.push_back(bound > 0 ? bound : std::nan(""));
+    }
+    write_file_atomically(out_dir / "singular_values.csv", csv);
+    PlotSpec plot{"POD of B1 (" + c.name + "): r = " + std::to_string(model.rank()), "mode i", "mm (plausible profile)", {values, bounds}, {{"tolerance", settings.tolerance}}, true};
+    write_png_plot(out_dir / "singular_values.png", plot);
+  }
+
   // 6. Summary.
   const double model_mb = static_cast<double>(std::filesystem::file_size(model_path)) / 1048576.0;
   const double db_mb = static_cast<double>(std::filesystem::file_size(db_path)) / 1048576.0;
@@ -255,7 +274,7 @@ int reduce_command(const CommandOptions& options) {
                           {"size_ratio", model_mb / db_mb},
                           {"time_s", elapsed()},
                           {"machine", machine_info()},
-                          {"files", {model_path.filename().string(), "target_modes.vtu", "final_shape_modes.vtu", "summary.json"}}});
+                          {"files", {model_path.filename().string(), "target_modes.vtu", "final_shape_modes.vtu", "singular_values.csv", "singular_values.png", "summary.json"}}});
   if (!options.quiet) {
     std::printf("drom reduce: %s -> %s\n", db_path.string().c_str(), model_path.string().c_str());
     std::printf("  rank r            %d of %ld profiles (profile scale %.0f MPa)\n", model.rank(), static_cast<long>(db.B1.cols()), settings.profile_scale);

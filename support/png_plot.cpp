@@ -1,0 +1,59 @@
+#include "support/png_plot.hpp"
+
+#include "support/atomic_file.hpp"
+#include "support/png_plot_script.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+namespace drom {
+
+namespace {
+
+std::string quoted(const std::filesystem::path& p) {
+  std::string s = "'";
+  for (char c : p.string()) s += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return s + "'";
+}
+
+nlohmann::json finite(const std::vector<double>& v) {
+  nlohmann::json a = nlohmann::json::array();
+  for (double d : v) a.push_back(std::isfinite(d) ? nlohmann::json(d) : nlohmann::json(nullptr));  // gaps in the line
+  return a;
+}
+
+}  // namespace
+
+bool write_png_plot(const std::filesystem::path& png, const PlotSpec& spec) {
+  static const bool available = std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") == 0;
+  if (!available) return false;
+  nlohmann::json j;
+  j["title"] = spec.title;
+  j["x_label"] = spec.x_label;
+  j["y_label"] = spec.y_label;
+  j["log_y"] = spec.log_y;
+  j["series"] = nlohmann::json::array();
+  for (const auto& s : spec.series) j["series"].push_back({{"name", s.name}, {"x", finite(s.x)}, {"y", finite(s.y)}, {"style", s.style}});
+  j["hlines"] = nlohmann::json::array();
+  for (const auto& [name, y] : spec.hlines) j["hlines"].push_back({{"name", name}, {"y", y}});
+  std::filesystem::create_directories(png.has_parent_path() ? png.parent_path() : std::filesystem::path("."));
+  const auto tag = std::to_string(::getpid()) + "_" + std::to_string(reinterpret_cast<std::uintptr_t>(&spec));
+  const auto spec_file = std::filesystem::temp_directory_path() / ("drom_plot_" + tag + ".json");
+  const auto script_file = std::filesystem::temp_directory_path() / ("drom_plot_" + tag + ".py");
+  std::ofstream(spec_file) << j.dump();
+  std::ofstream(script_file) << kPlotScript;
+  AtomicFile out(png);
+  const int rc = std::system(("/usr/bin/python3 " + quoted(script_file) + " " + quoted(spec_file) + " " + quoted(out.temporary_path()) + " >/dev/null 2>&1").c_str());
+  std::filesystem::remove(spec_file);
+  std::filesystem::remove(script_file);
+  if (rc != 0 || !std::filesystem::exists(out.temporary_path())) return false;
+  out.commit();
+  return true;
+}
+
+}  // namespace drom
