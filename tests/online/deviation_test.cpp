@@ -1,0 +1,95 @@
+// The seed's chapter 2 numerical study (§2.3), in our numbers: filtering by the POD basis, and what
+// a calibration error costs.
+#include "online/deviation_identifier.hpp"
+#include "online/laser_sheet.hpp"
+#include "reduce/pod.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+using namespace drom;
+
+namespace {
+
+reduce::DeviationFamily seed_family() {
+  reduce::DeviationFamily family(reduce::DeviationGrid{0, 100, 0, 100, 101, 101});
+  family.add_seed_parametric({0.2, 0.6, 9}, {0.1, 0.3, 9});  // eq. 2.20 over a 9 x 9 grid of (a, b) over a 9 x 9 grid of (a, b)
+  return family;
+}
+
+// Max |fit - S| over the area's grid.
+double max_error(const online::DeviationIdentifier& id) {
+  const Eigen::VectorXd c = id.coefficients();
+  double e = 0;
+  for (int j = 0; j <= 100; ++j)
+    for (int i = 0; i <= 100; ++i) e = std::max(e, std::abs(id.deviation(i, j, c) - reduce::seed_true_surface(i, j)));
+  return e;
+}
+
+}  // namespace
+
+TEST(DeviationIdentification, PodBasisFiltersNoiseBetterThanTheFamilyFrom441Points) {
+  // Check 1: S (eq. 2.19) sampled on 11 x 11, 21 x 21 and 51 x 51 points with N(0, 0.1) noise, fitted
+  // in the family F itself and in its POD basis B. Seed: with 441 points B's max error < 0.04 mm
+  // while F's stays about 0.1 mm; at 2601 points both drop, B still better.
+  // The seed does not give its (a, b) grid nor its solver. Here F is 81 members (9 x 9) and the fit in
+  // F is plain least squares (minimum norm at double precision): the members are so nearly
+  // dependent that the noise is amplified without bound, far beyond the seed's 0.1 mm. With 9
+  // members (3 x 3), F and B are alike (0.051 / 0.043 mm at 121 points, 0.028 / 0.026 at 441). The
+  // trend the issue asks for, B better than F from 441 points, holds either way.
+  const auto family = seed_family();
+  const reduce::Pod pod = reduce::truncated_pod(family.snapshots(), 1e-3);
+  std::printf("family: %d members, POD r = %d (bound %.1e)\n", family.size(), pod.rank(), pod.max_bound);
+  std::mt19937 rng(20150101);
+  std::normal_distribution<double> noise(0, 0.1);
+  std::vector<std::pair<double, double>> errors;
+  for (int n : {11, 21, 51}) {
+    std::vector<online::MeasuredPoint> pts;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const double x = 100.0 * i / (n - 1), y = 100.0 * j / (n - 1);
+        pts.push_back({x, y, reduce::seed_true_surface(x, y) + noise(rng)});
+      }
+    online::DeviationIdentifier in_family(family.grid(), family.snapshots()), in_basis(family.grid(), pod.modes);
+    in_family.add_points(pts);
+    in_basis.add_points(pts);
+    errors.emplace_back(max_error(in_family), max_error(in_basis));
+    std::printf("%4d points: max error in F %.3f mm, in B %.3f mm\n", n * n, errors.back().first, errors.back().second);
+  }
+  EXPECT_GT(errors[1].first, 1.5 * errors[1].second);  // 441 points: B better than F
+  EXPECT_LT(errors[1].second, 0.04);                   // the seed: B < 0.04 mm
+  EXPECT_LT(errors[2].second, errors[2].first);        // 2601: B still better...
+  EXPECT_LT(errors[2].second, errors[0].second);       // ...and better than with 121 points
+  EXPECT_LT(errors[0].second, 0.1);                    // 121 points: B at the noise's order
+}
+
+TEST(DeviationIdentification, SensorOffsetErrorCostsSlopeTimesOffset) {
+  // Check 2: the seed's line scan A(0, 50) -> B(100, 50) with an 80 mm sheet across the feed, offset
+  // [20, 0, 80] from the tool, a profile every mm; a sensor x-offset error of 0.1 mm gives about
+  // 0.01 mm of surface error, 1 mm about 0.1 mm (seed §2.3.2), within 35 %.
+  const auto family = seed_family();
+  const reduce::Pod pod = reduce::truncated_pod(family.snapshots(), 1e-3);
+  online::LaserSheet sheet;
+  sheet.offset = {20, 0, 80};
+  auto surface = [](double x, double y) -> std::optional<double> {
+    if (x < 0 || x > 100 || y < 0 || y > 100) return std::nullopt;
+    return reduce::seed_true_surface(x, y);
+  };
+  for (double offset_error : {0.1, 1.0}) {
+    online::SensorErrors errors;
+    errors.offset_error = {offset_error, 0, 0};
+    online::DeviationIdentifier id(family.grid(), pod.modes);
+    std::mt19937 rng(1);
+    for (double x = 0; x <= 100; x += 1) id.add_points(online::scan(sheet, errors, {x, 50, 0}, {x, 50, 0}, surface, rng));
+    // The error where the sheet went (x from 20 to 100, y from 10 to 90).
+    const Eigen::VectorXd c = id.coefficients();
+    double e = 0;
+    for (int j = 10; j <= 90; ++j)
+      for (int i = 20; i <= 100; ++i) e = std::max(e, std::abs(id.deviation(i, j, c) - reduce::seed_true_surface(i, j)));
+    std::printf("sensor x-offset error %.1f mm: surface error %.4f mm (seed: about %.2f)\n", offset_error, e, 0.1 * offset_error);
+    EXPECT_NEAR(e, 0.1 * offset_error, 0.35 * 0.1 * offset_error);
+  }
+}
