@@ -93,3 +93,43 @@ TEST(DeviationIdentification, SensorOffsetErrorCostsSlopeTimesOffset) {
     EXPECT_NEAR(e, 0.1 * offset_error, 0.35 * 0.1 * offset_error);
   }
 }
+
+TEST(DeviationIdentification, FortyFiveDegreeSheetSeesCurvatureAlongTheFeedSooner) {
+  // Check 3 (seed fig. 2.18): the tool runs along x; a sheet across the feed (90 deg) reads one x per
+  // profile, so a curvature along x needs profiles at three x at least, while a sheet at 45 deg spans
+  // x within each profile. Family: curvature along x (both signs, R 500..5000 mm), offset, both tilts.
+  reduce::DeviationFamily family(reduce::DeviationGrid{0, 100, 0, 100, 51, 51});
+  family.add_bending('y', {500, 5000, 5});
+  family.add_offset({-0.5, 0.5, 2});
+  family.add_tilt('x', {-1e-3, 1e-3, 2});
+  family.add_tilt('y', {-1e-3, 1e-3, 2});
+  const reduce::Pod pod = reduce::truncated_pod(family.snapshots(), 1e-6);
+  const double xc = 50, R = 1500;
+  auto truth = [&](double x, double y) { return 0.2 + 4e-4 * (y - 50) + (x - xc) * (x - xc) / (2 * R); };
+  auto surface = [&](double x, double y) -> std::optional<double> {
+    if (x < 0 || x > 100 || y < 0 || y > 100) return std::nullopt;
+    return truth(x, y);
+  };
+  auto profiles_needed = [&](double angle) {
+    online::LaserSheet sheet;
+    sheet.offset = {20, 0, 80};
+    sheet.angle_deg = angle;
+    sheet.length = 60;
+    online::DeviationIdentifier id(family.grid(), pod.modes);
+    std::mt19937 rng(1);
+    for (int k = 0; k < 40; ++k) {
+      const Eigen::Vector3d tip(10 + k, 50, 0);  // a profile every mm of feed
+      id.add_points(online::scan(sheet, {}, tip, tip, surface, rng));
+      const Eigen::VectorXd c = id.coefficients();
+      double e = 0;
+      for (int j = 0; j <= 100; j += 5)
+        for (int i = 0; i <= 100; i += 5) e = std::max(e, std::abs(id.deviation(i, j, c) - truth(i, j)));
+      if (e < 1e-3) return k + 1;
+    }
+    return 1000;
+  };
+  const int at_90 = profiles_needed(90), at_45 = profiles_needed(45);
+  std::printf("profiles to identify a curvature along the feed within 1e-3 mm: 90 deg sheet %d, 45 deg sheet %d (r = %d)\n", at_90, at_45, pod.rank());
+  EXPECT_LT(at_45, at_90);
+  EXPECT_GE(at_90, 3);
+}
