@@ -28,6 +28,7 @@ class DeviationIdentifier {
   Eigen::VectorXd coefficients() const;
   double deviation(double x, double y) const;  // with the current coefficients
   double deviation(double x, double y, const Eigen::VectorXd& coefficients) const;
+  double altitude(double x, double y, const Eigen::VectorXd& coefficients) const { return nominal_z_ + deviation(x, y, coefficients); }
   // RMS of the used points against the current fit.
   double residual_rms() const;
   long long points() const { return points_; }

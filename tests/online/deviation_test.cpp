@@ -1,6 +1,7 @@
 // The seed's chapter 2 numerical study (§2.3), in our numbers: filtering by the POD basis, and what
 // a calibration error costs.
 #include "online/deviation_identifier.hpp"
+#include "online/deviation_learning.hpp"
 #include "online/laser_sheet.hpp"
 #include "reduce/pod.hpp"
 
@@ -132,4 +133,72 @@ TEST(DeviationIdentification, FortyFiveDegreeSheetSeesCurvatureAlongTheFeedSoone
   std::printf("profiles to identify a curvature along the feed within 1e-3 mm: 90 deg sheet %d, 45 deg sheet %d (r = %d)\n", at_90, at_45, pod.rank());
   EXPECT_LT(at_45, at_90);
   EXPECT_GE(at_90, 3);
+}
+
+TEST(DeviationIdentification, CorrectedPathStaysOnTheTrueSurfaceFromTheFirstMoveAfterLearning) {
+  // Check 4: a deviation inside the family's span, N(0, 0.05) noise, a 45 deg sheet 20 mm ahead of the
+  // tool, profiles at 10 Hz. Approach from outside the area in three waypoints, then one-way passes
+  // along x every 20 mm. Learning ends when the offline scan extent is reached and the recent
+  // profiles are predicted within 0.01 mm (net of noise); from the first cutting move after that, the
+  // corrected altitude under the tool must be within 0.02 mm of the true surface.
+  reduce::DeviationFamily family(reduce::DeviationGrid{0, 100, 0, 100, 51, 51});
+  family.add_bending('x', {1000, 5000, 3});
+  family.add_bending('y', {1000, 5000, 3});
+  family.add_twist({-1e-4, 1e-4, 2});
+  family.add_offset({-0.5, 0.5, 2});
+  family.add_tilt('x', {-2e-3, 2e-3, 2});
+  family.add_tilt('y', {-2e-3, 2e-3, 2});
+  const reduce::Pod pod = reduce::truncated_pod(family.snapshots(), 1e-4);
+  auto truth = [](double x, double y) { return 0.3 + 1e-3 * (x - 50) - 5e-4 * (y - 50) + (x - 50) * (x - 50) / 4000 - (y - 50) * (y - 50) / 6000 + 4e-5 * (x - 50) * (y - 50); };
+  const online::HeightField surface = [&](double x, double y) -> std::optional<double> {
+    if (x < 0 || x > 100 || y < 0 || y > 100) return std::nullopt;
+    return truth(x, y);
+  };
+  // The program: approach (rapid-free, at 10 mm/s), then passes; program times at that feed.
+  std::vector<Eigen::Vector3d> pts{{-60, -40, 0}, {-20, 0, 0}, {-10, 30, 0}, {0, 10, 0}};
+  for (int p = 0; p < 5; ++p) {
+    pts.emplace_back(100, 10 + 20 * p, 0);
+    if (p < 4) pts.emplace_back(0, 30 + 20 * p, 0);
+  }
+  online::ScanPlan plan;
+  plan.path.resize(static_cast<Eigen::Index>(pts.size()), 4);
+  double t = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (i > 0) t += (pts[i] - pts[i - 1]).norm() / 10;
+    plan.path.row(static_cast<Eigen::Index>(i)) << pts[i].x(), pts[i].y(), pts[i].z(), t;
+  }
+  const double cutting_start = plan.path(3, 3);
+  plan.sheet.offset = {20, 0, 80};
+  plan.sheet.angle_deg = 45;
+  plan.period = 0.1;
+  // Offline: the scan extent needed, checked along the first pass.
+  std::vector<Eigen::Vector2d> check;
+  for (double x = 0; x <= 100; x += 5) check.emplace_back(x, 10);
+  Eigen::VectorXd amplitude(pod.rank());
+  for (int k = 0; k < pod.rank(); ++k) amplitude[k] = pod.singular_values[k] * pod.right.col(k).cwiseAbs().maxCoeff();
+  const auto extent = online::needed_scan_extent(family.grid(), pod.modes, amplitude, plan, plan.path(plan.path.rows() - 1, 3), 0.01, check);
+  ASSERT_TRUE(std::isfinite(extent.program_time));
+  // Online, with noise.
+  online::DeviationIdentifier id(family.grid(), pod.modes);
+  online::LearningMonitor monitor(0.01, 0.05, 5);
+  plan.errors.noise_sd = 0.05;
+  std::mt19937 rng(7);
+  double learned_at = -1, worst = 0;
+  int corrected = 0;
+  for (double tp : plan.profile_times(1e9)) {
+    const Eigen::Vector3d tip = plan.tool_at(tp);
+    // The correction the tool gets now, from the fit so far.
+    if (learned_at >= 0 && tp >= cutting_start && tip.x() >= 0 && tip.x() <= 100) {
+      const Eigen::VectorXd c = id.coefficients();
+      worst = std::max(worst, std::abs(id.altitude(tip.x(), tip.y(), c) - truth(tip.x(), tip.y())));
+      ++corrected;
+    }
+    monitor.add(id, online::scan(plan.sheet, plan.errors, tip, tip, surface, rng));
+    if (learned_at < 0 && monitor.learned() && tp >= extent.program_time) learned_at = tp;
+  }
+  std::printf("r = %d; scan extent needed %.1f s of program (approach ends at %.1f s); learned at %.1f s; corrected path: max error %.4f mm over %d positions\n",
+              pod.rank(), extent.program_time, cutting_start, learned_at, worst, corrected);
+  ASSERT_GE(learned_at, 0);
+  EXPECT_GT(corrected, 100);
+  EXPECT_LE(worst, 0.02);
 }
