@@ -216,6 +216,22 @@ std::vector<double> CaseReader::reals(const std::string& key, Range range, std::
   return values;
 }
 
+std::vector<std::string> CaseReader::strings(const std::string& key) {
+  impl_->consumed.insert(key);
+  auto* node = impl_->find(key);
+  if (!node) fail(key, "missing; expected an array of strings");
+  auto* array = node->as_array();
+  if (!array) fail(key, "expected an array of strings, got " + show(*node));
+  std::vector<std::string> values;
+  for (std::size_t i = 0; i < array->size(); ++i) {
+    const auto& item = *array->get(i);
+    auto v = item.value_exact<std::string>();
+    if (!v) fail(key, "item " + std::to_string(i + 1) + " is not a string: " + show(item));
+    values.push_back(*v);
+  }
+  return values;
+}
+
 std::size_t CaseReader::table_count(const std::string& key) {
   impl_->consumed.insert(key);
   auto* node = impl_->find(key);

@@ -42,6 +42,7 @@ class CaseReader {
   std::string text(const std::string& key, std::optional<std::string> fallback = std::nullopt);
   std::string choice(const std::string& key, const std::vector<std::string>& allowed, std::optional<std::string> fallback = std::nullopt);
   std::vector<double> reals(const std::string& key, Range range, std::optional<std::vector<double>> fallback = std::nullopt);
+  std::vector<std::string> strings(const std::string& key);
   // Number of tables in an array of tables ([[name]]); 0 when absent.
   std::size_t table_count(const std::string& key);
 

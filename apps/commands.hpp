@@ -31,5 +31,6 @@ int removal_command(const CommandOptions& options);  // drom removal
 int offline_command(const CommandOptions& options);  // drom offline
 int truth_command(const CommandOptions& options);    // drom truth
 int reduce_command(const CommandOptions& options);   // drom reduce
+int deviation_command(const CommandOptions& options);  // drom deviation
 
 }  // namespace drom::app

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
       {"offline", "simulate the machining once per unit stress profile: the snapshot database (B1, B2)", drom::app::offline_command},
       {"truth", "simulate the machining for the case's own stress profile, with full fields", drom::app::truth_command},
       {"reduce", "compress an offline database into the light model the online predictor loads", drom::app::reduce_command},
+      {"deviation", "learn an unknown blank's deviation from laser profiles during the approach (seed chapter 2)", drom::app::deviation_command},
       {"mesh", "mesh the case's part and write it with its clamps to VTK", drom::app::mesh_command},
       {"check", "validate a case file and print it with every override applied", drom::app::check_command},
   };

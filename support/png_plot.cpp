@@ -39,6 +39,13 @@ bool write_png_plot(const std::filesystem::path& png, const PlotSpec& spec) {
   j["log_y"] = spec.log_y;
   j["series"] = nlohmann::json::array();
   for (const auto& s : spec.series) j["series"].push_back({{"name", s.name}, {"x", finite(s.x)}, {"y", finite(s.y)}, {"style", s.style}});
+  if (spec.map) {
+    const auto& m = *spec.map;
+    nlohmann::json rows = nlohmann::json::array();
+    for (int r = 0; r < m.ny; ++r)
+      rows.push_back(finite(std::vector<double>(m.values.begin() + static_cast<long>(r) * m.nx, m.values.begin() + static_cast<long>(r + 1) * m.nx)));
+    j["map"] = {{"x0", m.x0}, {"x1", m.x1}, {"y0", m.y0}, {"y1", m.y1}, {"values", rows}, {"label", m.label}, {"cmap", m.colormap}};
+  }
   j["hlines"] = nlohmann::json::array();
   for (const auto& [name, y] : spec.hlines) j["hlines"].push_back({{"name", name}, {"y", y}});
   std::filesystem::create_directories(png.has_parent_path() ? png.parent_path() : std::filesystem::path("."));

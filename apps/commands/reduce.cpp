@@ -239,7 +239,13 @@ int reduce_command(const CommandOptions& options) {
       bounds.x.push_back(static_cast<double>(i + 1)), bounds.y.push_back(bound > 0 ? bound : std::nan(""));
     }
     write_file_atomically(out_dir / "singular_values.csv", csv);
-    PlotSpec plot{"POD of B1 (" + c.name + "): r = " + std::to_string(model.rank()), "mode i", "mm (plausible profile)", {values, bounds}, {{"tolerance", settings.tolerance}}, true};
+    PlotSpec plot;
+    plot.title = "POD of B1 (" + c.name + "): r = " + std::to_string(model.rank());
+    plot.x_label = "mode i";
+    plot.y_label = "mm (plausible profile)";
+    plot.series = {values, bounds};
+    plot.hlines = {{"tolerance", settings.tolerance}};
+    plot.log_y = true;
     write_png_plot(out_dir / "singular_values.png", plot);
   }
 
