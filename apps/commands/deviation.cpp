@@ -232,6 +232,8 @@ int deviation_command(const CommandOptions& options) {
   write_png_plot(options.out / "error_map.png", map);
 
   const double extent_length = std::isfinite(extent.program_time) ? extent.program_time * c.feed : -1;
+  std::vector<double> per_mode;  // -1: that mode is never identified within the tolerance on this program
+  for (double t : extent.per_mode_time) per_mode.push_back(std::isfinite(t) ? t : -1.0);
   write_summary(options.out, {{"command", "deviation"},
                               {"case", c.name},
                               {"family_members", family.size()},
@@ -239,6 +241,7 @@ int deviation_command(const CommandOptions& options) {
                               {"pod_max_bound_mm", pod.max_bound},
                               {"scan_extent_program_time_s", std::isfinite(extent.program_time) ? extent.program_time : -1.0},
                               {"scan_extent_path_mm", extent_length},
+                              {"scan_extent_per_mode_s", per_mode},
                               {"cutting_starts_s", program.cutting_start},
                               {"learned_at_program_time_s", learned_at},
                               {"profiles", profiles},

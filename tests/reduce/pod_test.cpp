@@ -93,3 +93,39 @@ TEST(SpaceTimeField, SeparatedFormIsWithinItsBoundAndLinearBetweenInstants) {
   EXPECT_NEAR(f.at(17, 1e9), f.at(17, times[m - 1]), 1e-14);
   std::printf("space-time: %d terms for 200 x 60, bound %.2e, measured %.2e\n", f.terms(), f.bound(), worst);
 }
+
+#include "reduce/deviation_family.hpp"
+#include "support/input_error.hpp"
+
+#include <filesystem>
+#include <fstream>
+
+TEST(DeviationFamily, MeasuredSurfacesJoinTheFamilyAndBadFilesAreNamed) {
+  // A measured blank (a tilted plane sampled on a coarse grid, with a header line) lands on the
+  // family's grid exactly at its points and between them by inverse-distance weights.
+  const auto csv = std::filesystem::temp_directory_path() / "drom_measured_blank.csv";
+  {
+    std::ofstream out(csv);
+    out << "x,y,z\n";
+    for (int j = 0; j <= 10; ++j)
+      for (int i = 0; i <= 10; ++i) out << 10 * i << "," << 10 * j << "," << 5 + 0.01 * (10 * i) << "\n";
+  }
+  drom::reduce::DeviationFamily family(drom::reduce::DeviationGrid{0, 100, 0, 100, 11, 11});
+  family.add_measured(csv, 5.0);
+  ASSERT_EQ(family.size(), 1);
+  const auto& g = family.grid();
+  for (int j = 0; j < g.ny; ++j)
+    for (int i = 0; i < g.nx; ++i) EXPECT_NEAR(family.snapshots()(g.index(i, j), 0), 0.01 * g.x(i), 1e-12);
+  {
+    std::ofstream out(csv);
+    out << "x,y,z\n1,2,3\n4,five,6\n";
+  }
+  try {
+    family.add_measured(csv);
+    FAIL() << "no error";
+  } catch (const drom::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(csv.string() + ":3"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(csv);
+  EXPECT_THROW(family.add_measured(csv), drom::InputError);
+}
