@@ -135,7 +135,7 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
       ++report.invalid;
       continue;
     }
-    const auto p = model_.target.locate(pt.x, pt.y, hint);
+    const auto p = model_.target.locate(pt.x, pt.y, hint, false);
     if (!p) {
       ++report.outside;
       continue;
@@ -180,8 +180,7 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
     } else {
       f = &face_sums_[static_cast<std::size_t>(face_slot_[static_cast<std::size_t>(p->face)])];
     }
-    Eigen::Matrix<double, 9, 1> N;
-    for (int q = 0; q < 9; ++q) N[q] = q < p->count ? p->weights[static_cast<std::size_t>(q)] : 0.0;
+    const Eigen::Map<const Eigen::Matrix<double, 9, 1>> N(p->weights.data());  // zero past p->count
     f->NN.noalias() += N * N.transpose();
     f->Nm += N * m;
     const double e = m - N.dot(f->predicted);

@@ -122,7 +122,7 @@ SurfaceMesh::SurfaceMesh(Eigen::Matrix3Xd nodes, std::vector<int> faces, int nod
   }
 }
 
-bool SurfaceMesh::inside_face(int f, double x, double y, SurfacePoint& out) const {
+bool SurfaceMesh::inside_face(int f, double x, double y, SurfacePoint& out, bool slopes) const {
   const int n = per_face_;
   const int* conn = faces_.data() + static_cast<std::size_t>(f) * n;
   const FaceBox& box = boxes_[static_cast<std::size_t>(f)];
@@ -155,6 +155,13 @@ bool SurfaceMesh::inside_face(int f, double x, double y, SurfacePoint& out) cons
   const bool inside = is_triangle(n) ? (r >= -tol && s >= -tol && r + s <= 1 + tol) : (std::abs(r) <= 1 + tol && std::abs(s) <= 1 + tol);
   if (!inside) return false;
   face_shape_functions(n, r, s, N, Nr, Ns);
+  out.face = f;
+  out.count = n;
+  for (int k = 0; k < n; ++k) {
+    out.nodes[static_cast<std::size_t>(k)] = conn[k];
+    out.weights[static_cast<std::size_t>(k)] = N[k];
+  }
+  if (!slopes) return true;
   Eigen::Matrix2d Jinv;  // d(r, s)/d(x, y)
   if (box.affine) {
     Jinv = box.inverse;
@@ -166,26 +173,22 @@ bool SurfaceMesh::inside_face(int f, double x, double y, SurfacePoint& out) cons
     }
     Jinv = J.inverse();
   }
-  out.face = f;
-  out.count = n;
   for (int k = 0; k < n; ++k) {
     const auto kk = static_cast<std::size_t>(k);
-    out.nodes[kk] = conn[k];
-    out.weights[kk] = N[k];
     out.dx[kk] = Nr[k] * Jinv(0, 0) + Ns[k] * Jinv(1, 0);
     out.dy[kk] = Nr[k] * Jinv(0, 1) + Ns[k] * Jinv(1, 1);
   }
   return true;
 }
 
-std::optional<SurfacePoint> SurfaceMesh::locate(double x, double y, int hint) const {
+std::optional<SurfacePoint> SurfaceMesh::locate(double x, double y, int hint, bool slopes) const {
   if (buckets_.empty() || !std::isfinite(x) || !std::isfinite(y)) return std::nullopt;
   SurfacePoint p;
-  if (hint >= 0 && hint < face_count() && inside_face(hint, x, y, p)) return p;
+  if (hint >= 0 && hint < face_count() && inside_face(hint, x, y, p, slopes)) return p;
   const int i = static_cast<int>(std::floor((x - x0_) / cell_)), j = static_cast<int>(std::floor((y - y0_) / cell_));
   if (i < 0 || j < 0 || i >= nx_ || j >= ny_) return std::nullopt;
   for (int f : buckets_[static_cast<std::size_t>(j * nx_ + i)])
-    if (inside_face(f, x, y, p)) return p;
+    if (inside_face(f, x, y, p, slopes)) return p;
   return std::nullopt;
 }
 

@@ -34,8 +34,9 @@ class SurfaceMesh {
   const std::vector<int>& faces() const { return faces_; }
 
   // The face under (x, y) and the shape functions there; empty outside the surface's projection.
-  // `hint`: a face to try first (the previous point's, for points along a profile).
-  std::optional<SurfacePoint> locate(double x, double y, int hint = -1) const;
+  // `hint`: a face to try first (the previous point's, for points along a profile); `slopes`: fill
+  // dx and dy too (not needed to interpolate values).
+  std::optional<SurfacePoint> locate(double x, double y, int hint = -1, bool slopes = true) const;
   // Interpolation of a nodal field (node_count rows) at a located point.
   template <class Field>
   auto interpolate(const SurfacePoint& p, const Field& f) const {
@@ -46,7 +47,7 @@ class SurfaceMesh {
   double nominal_altitude(const SurfacePoint& p) const;
 
  private:
-  bool inside_face(int face, double x, double y, SurfacePoint& out) const;
+  bool inside_face(int face, double x, double y, SurfacePoint& out, bool slopes) const;
   struct FaceBox {
     double xmin, xmax, ymin, ymax;
     // Faces whose horizontal map is affine (straight sides, midsides at mid-edge: every face of a
