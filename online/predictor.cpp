@@ -44,7 +44,16 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
   face_stamp_.assign(static_cast<std::size_t>(model_.target.face_count()), 0);
   face_slot_.assign(static_cast<std::size_t>(model_.target.face_count()), -1);
   node_delta_.setZero(n, r_);
-  for (const auto& h : model_.histories) time_factors_.emplace_back(h.terms());
+  for (const auto& h : model_.histories) {
+    if (h.times().size() != model_.histories.front().times().size() || h.times() != model_.histories.front().times())
+      throw std::invalid_argument("predictor: the model's histories must share their instants");
+    interval_factors_.emplace_back(h.terms());
+    interval_factors_.emplace_back(h.terms());
+    space_by_node_.emplace_back(h.space().transpose());  // a node's terms contiguous: one cache line, not one per term
+  }
+  node_cached_.assign(static_cast<std::size_t>(n), 0);
+  node_lo_.setZero(n, r_);
+  node_hi_.setZero(n, r_);
   normal_ = Eigen::MatrixXd::Zero(r_, r_);
   rhs_ = Eigen::VectorXd::Zero(r_);
 
@@ -125,7 +134,19 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
     std::fill(face_stamp_.begin(), face_stamp_.end(), 0);
     stamp_ = 1;
   }
-  for (int k = 0; k < r_; ++k) model_.histories[static_cast<std::size_t>(k)].time_factors(t, time_factors_[static_cast<std::size_t>(k)]);
+  // U1(node, t) is linear in t between two stored instants: each node's values at the interval's two
+  // ends are computed once (r x terms each) and kept while profiles stay in that interval (tens of
+  // profiles at 10 Hz), so a profile pays r per node, not r x terms.
+  const auto interval = r_ > 0 ? reduce::locate_time(model_.histories.front().times(), t) : reduce::TimeInterval{};
+  if (r_ > 0 && model_.histories.front().times().size() > 1 && interval.i != cached_interval_) {
+    cached_interval_ = interval.i;
+    std::fill(node_cached_.begin(), node_cached_.end(), 0);
+    for (int k = 0; k < r_; ++k) {
+      const auto& T = model_.histories[static_cast<std::size_t>(k)].time();
+      interval_factors_[static_cast<std::size_t>(2 * k)] = T.row(interval.i).transpose();
+      interval_factors_[static_cast<std::size_t>(2 * k + 1)] = T.row(interval.i + 1).transpose();
+    }
+  }
   touched_.clear();
   const bool offset_varies = !offsets_.empty();  // otherwise 0 everywhere: no need for t_cut
   double square_error = 0;
@@ -171,8 +192,15 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
         const int node = p->nodes[static_cast<std::size_t>(q)];
         if (node_stamp_[static_cast<std::size_t>(node)] != stamp_) {
           node_stamp_[static_cast<std::size_t>(node)] = stamp_;
-          for (int k = 0; k < r_; ++k)
-            node_delta_(node, k) = model_.histories[static_cast<std::size_t>(k)].space().row(node).dot(time_factors_[static_cast<std::size_t>(k)]) - cut_values_(node, k);
+          if (!node_cached_[static_cast<std::size_t>(node)]) {
+            node_cached_[static_cast<std::size_t>(node)] = 1;
+            for (int k = 0; k < r_; ++k) {
+              const auto a = space_by_node_[static_cast<std::size_t>(k)].col(node);
+              node_lo_(node, k) = a.dot(interval_factors_[static_cast<std::size_t>(2 * k)]);
+              node_hi_(node, k) = a.dot(interval_factors_[static_cast<std::size_t>(2 * k + 1)]);
+            }
+          }
+          node_delta_.row(node) = (1 - interval.weight) * node_lo_.row(node) + interval.weight * node_hi_.row(node) - cut_values_.row(node);
         }
         f->predicted[q] = node_delta_.row(node).dot(snap->alpha);
       }

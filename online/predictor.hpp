@@ -145,7 +145,12 @@ class Predictor {
   std::vector<unsigned> node_stamp_, face_stamp_;
   unsigned stamp_ = 0;
   Eigen::MatrixXd node_delta_;  // target nodes x r
-  std::vector<Eigen::VectorXd> time_factors_;
+  // U1 at the two ends of the current time interval, per node, computed when first needed there.
+  Eigen::Index cached_interval_ = -1;
+  std::vector<Eigen::VectorXd> interval_factors_;  // per mode: time factors at the interval's start, end
+  std::vector<Eigen::MatrixXd> space_by_node_;     // per mode: its space factors, terms x nodes
+  std::vector<char> node_cached_;
+  Eigen::MatrixXd node_lo_, node_hi_;  // target nodes x r
   Eigen::MatrixXd normal_;  // sum g g^T / sigma^2
   Eigen::VectorXd rhs_;     // sum g m / sigma^2
   long long points_ = 0;

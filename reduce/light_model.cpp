@@ -23,6 +23,12 @@ void put(Hdf5Writer& h5, const std::string& name, const Eigen::MatrixXd& m) {
   h5.write(name, rows(m), static_cast<std::size_t>(m.rows()), static_cast<std::size_t>(m.cols()));
 }
 
+// The bulky factors, already rounded to single precision by the reduction (its bound covers that).
+void put_single(Hdf5Writer& h5, const std::string& name, const Eigen::MatrixXd& m) {
+  const auto d = rows(m);
+  h5.write(name, std::vector<float>(d.begin(), d.end()), static_cast<std::size_t>(m.rows()), static_cast<std::size_t>(m.cols()));
+}
+
 std::vector<double> as_doubles(const std::vector<int>& v) { return {v.begin(), v.end()}; }
 
 Eigen::MatrixXd get(const Hdf5Reader& h5, const std::string& name) {
@@ -66,13 +72,13 @@ void LightModel::write(const std::filesystem::path& file) const {
   put(h5, "prior_sd", prior_sd);
   if (!histories.empty()) put(h5, "history_times", histories.front().times());
   for (int k = 0; k < rank(); ++k) {
-    put(h5, "history_" + std::to_string(k) + "_space", histories[static_cast<std::size_t>(k)].space());
-    put(h5, "history_" + std::to_string(k) + "_time", histories[static_cast<std::size_t>(k)].time());
+    put_single(h5, "history_" + std::to_string(k) + "_space", histories[static_cast<std::size_t>(k)].space());
+    put_single(h5, "history_" + std::to_string(k) + "_time", histories[static_cast<std::size_t>(k)].time());
   }
   put(h5, "shape_nodes", shape_nodes.transpose());
   h5.write("shape_faces", as_doubles(shape_faces), shape_faces.size() / static_cast<std::size_t>(std::max(1, shape_face_nodes)),
            static_cast<std::size_t>(shape_face_nodes));
-  put(h5, "final_basis", final_basis);
+  put_single(h5, "final_basis", final_basis);
   put(h5, "path", path);
   h5.commit();
 }

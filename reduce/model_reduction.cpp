@@ -33,14 +33,20 @@ ReductionReport reduce_snapshots(const SnapshotDatabase& db, const ReductionSett
   for (int k = 0; k < r; ++k) {
     const double sigma = pod.singular_values[k];
     const Eigen::Map<const Eigen::MatrixXd> history(pod.modes.col(k).data(), nodes, stations);
-    const SpaceTimeField scaled(sigma * history, db.station_times, settings.history_tolerance / r, db.program_start);
-    model.histories.emplace_back(scaled.space(), scaled.time() / sigma, scaled.times(), scaled.bound() / sigma);
-    model.history_bound += scaled.bound();
+    const Eigen::MatrixXd target = sigma * history;
+    const SpaceTimeField scaled(target, db.station_times, settings.history_tolerance / r, db.program_start);
+    // The model file keeps the factors in single precision (half the size): round them here, and
+    // measure the rounded form's error at the stations, so the bound covers what is written.
+    const Eigen::MatrixXd space = scaled.space().cast<float>().cast<double>();
+    const Eigen::MatrixXd time = (scaled.time() / sigma).cast<float>().cast<double>();
+    const double error = (target - sigma * space * time.bottomRows(stations).transpose()).cwiseAbs().maxCoeff();  // (a start instant may lead)
+    model.histories.emplace_back(space, time, scaled.times(), error / sigma);
+    model.history_bound += error;
     report.history_terms += scaled.terms();
   }
 
   // 4. Final-shape basis: alpha = D V^T c / s maps back to B2 c.
-  model.final_basis = settings.profile_scale * db.final_shape * pod.right * pod.singular_values.head(r).cwiseInverse().asDiagonal();
+  model.final_basis = (settings.profile_scale * db.final_shape * pod.right * pod.singular_values.head(r).cwiseInverse().asDiagonal()).cast<float>().cast<double>();
 
   // What the model gives for each database column, against the column (both in mm at profile_scale).
   const Eigen::MatrixXd alpha = pod.singular_values.head(r).asDiagonal() * pod.right.transpose();  // r x P

@@ -26,7 +26,7 @@ Pod truncated_pod(const Eigen::MatrixXd& snapshots, double tolerance, PodNorm no
   const Eigen::Index k = std::min(n, m);
   Eigen::HouseholderQR<Eigen::MatrixXd> qr(snapshots);
   const Eigen::MatrixXd R = qr.matrixQR().topRows(k).triangularView<Eigen::Upper>();
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(R, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(R, Eigen::ComputeThinU | Eigen::ComputeThinV);  // divide and conquer: R can be hundreds wide
   pod.singular_values = svd.singularValues();
   const auto bound = [&](int r) {
     return norm == PodNorm::Max ? max_norm_bound(pod.singular_values, r) : euclidean_bound(pod.singular_values, r);

@@ -1,7 +1,7 @@
 #pragma once
 // A history over a surface, f(node, t), kept as sum_l a_l(node) b_l(t) (design.md §5): the SVD of the
-// nodes x times array truncated by the POD bound, so the separated form is within `tolerance` (max
-// norm, the history's unit) of every stored instant. Between stored instants it is linear in time,
+// nodes x times array truncated at the fewest terms whose measured max error at the stored instants
+// is within `tolerance` (the history's unit). Between stored instants it is linear in time,
 // as the full history would be; before the first instant it goes linearly to `start_value` at
 // time `start` (0 displacement when the machining starts), and after the last it stays there.
 #include "reduce/pod.hpp"
@@ -21,7 +21,7 @@ class SpaceTimeField {
   SpaceTimeField(Eigen::MatrixXd space, Eigen::MatrixXd time, Eigen::VectorXd times, double bound);
 
   int terms() const { return static_cast<int>(space_.cols()); }
-  double bound() const { return bound_; }  // max-norm bound of the truncation at the stored instants
+  double bound() const { return bound_; }  // the truncation's max error at the stored instants (measured)
   const Eigen::MatrixXd& space() const { return space_; }  // nodes x terms: a_l
   const Eigen::MatrixXd& time() const { return time_; }    // instants x terms: b_l (singular values folded in)
   const Eigen::VectorXd& times() const { return times_; }
