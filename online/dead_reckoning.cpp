@@ -31,10 +31,10 @@ double DeadReckoning::program_time(double clock) const {
   return std::min(cap, t0 + std::max(0.0, clock - last_clock_));
 }
 
-Eigen::Vector3d DeadReckoning::position_at_program_time(double t) const {
-  const Eigen::VectorXd times = path_.col(3);
+Eigen::Vector3d path_position(const Eigen::MatrixXd& path, double t) {
+  const Eigen::VectorXd times = path.col(3);
   const auto [i, w] = reduce::locate_time(times, t);
-  return ((1 - w) * path_.row(i).head<3>() + w * path_.row(i + 1).head<3>()).transpose();
+  return ((1 - w) * path.row(i).head<3>() + w * path.row(i + 1).head<3>()).transpose();
 }
 
 }  // namespace drom::online

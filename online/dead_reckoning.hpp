@@ -10,6 +10,10 @@
 
 namespace drom::online {
 
+// The tool tip on a path (waypoints x, y, z, program time) at program time t, linear between
+// waypoints and held at the ends.
+Eigen::Vector3d path_position(const Eigen::MatrixXd& path, double t);
+
 class DeadReckoning {
  public:
   // path: waypoints x, y, z, program time (increasing); sync: indices of the waypoints that raise an
@@ -21,7 +25,7 @@ class DeadReckoning {
   // Estimated program time at clock time `clock` (before any edge: the clock itself).
   double program_time(double clock) const;
   Eigen::Vector3d position(double clock) const { return position_at_program_time(program_time(clock)); }
-  Eigen::Vector3d position_at_program_time(double t) const;
+  Eigen::Vector3d position_at_program_time(double t) const { return path_position(path_, t); }
 
   const Eigen::MatrixXd& path() const { return path_; }
   const std::vector<int>& sync() const { return sync_; }

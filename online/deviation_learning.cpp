@@ -1,6 +1,5 @@
 #include "online/deviation_learning.hpp"
 
-#include "reduce/space_time_field.hpp"
 
 #include <cmath>
 #include <limits>
@@ -14,11 +13,7 @@ std::vector<double> ScanPlan::profile_times(double until) const {
   return t;
 }
 
-Eigen::Vector3d ScanPlan::tool_at(double t) const {
-  const Eigen::VectorXd times = path.col(3);
-  const auto [i, w] = reduce::locate_time(times, t);
-  return ((1 - w) * path.row(i).head<3>() + w * path.row(i + 1).head<3>()).transpose();
-}
+
 
 ScanExtent needed_scan_extent(const reduce::DeviationGrid& grid, const Eigen::MatrixXd& modes, const Eigen::VectorXd& amplitudes, const ScanPlan& plan,
                               double until, double tolerance, const std::vector<Eigen::Vector2d>& check) {

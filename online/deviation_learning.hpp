@@ -7,6 +7,7 @@
 //     tolerance along the cutting path is found; the worst mode's is the extent needed;
 //   - online, the residual: the recent profiles are predicted, before being added, within the
 //     tolerance net of the sensor's noise.
+#include "online/dead_reckoning.hpp"
 #include "online/deviation_identifier.hpp"
 #include "online/laser_sheet.hpp"
 
@@ -25,7 +26,7 @@ struct ScanPlan {
   LaserSheet sheet;
   SensorErrors errors;
   std::vector<double> profile_times(double until) const;
-  Eigen::Vector3d tool_at(double t) const;
+  Eigen::Vector3d tool_at(double t) const { return path_position(path, t); }
 };
 
 struct ScanExtent {

@@ -64,9 +64,11 @@ std::vector<int> local_faces(const std::vector<fem::BoundaryFace>& faces, const 
   return out;
 }
 
-// The programmed path as a polyline of tool-tip positions with their program times.
-Eigen::MatrixXd path_waypoints(const levelset::Toolpath& path, const levelset::PathTimeline& timeline) {
+// The programmed path as a polyline of tool-tip positions with their program times, and whether each
+// segment (i, i + 1) belongs to a cutting move.
+Eigen::MatrixXd path_waypoints(const levelset::Toolpath& path, const levelset::PathTimeline& timeline, std::vector<char>& cutting) {
   std::vector<Eigen::Vector4d> rows;
+  cutting.clear();
   for (std::size_t m = 0; m < path.moves.size(); ++m) {
     const auto& move = path.moves[m];
     const auto points = levelset::move_polyline(move, 0.01);
@@ -75,9 +77,11 @@ Eigen::MatrixXd path_waypoints(const levelset::Toolpath& path, const levelset::P
       if (k > 0) along += (points[k] - points[k - 1]).norm();
       if (k == 0 && !rows.empty()) continue;  // the previous move's end
       const double t = timeline.time_at_length(timeline.move_start_length(m) + std::min(along, move.length()));
+      if (!rows.empty()) cutting.push_back(move.cutting());
       rows.emplace_back(points[k].x(), points[k].y(), points[k].z(), t);
     }
   }
+  cutting.push_back(0);  // past the last waypoint
   Eigen::MatrixXd w(static_cast<Eigen::Index>(rows.size()), 4);
   for (std::size_t i = 0; i < rows.size(); ++i) w.row(static_cast<Eigen::Index>(i)) = rows[i].transpose();
   return w;
@@ -174,16 +178,8 @@ int reduce_command(const CommandOptions& options) {
   const PartModel part = build_part(c);
   const levelset::Toolpath toolpath = build_toolpath(c, part);
   const levelset::PathTimeline timeline(toolpath);
-  model.path = path_waypoints(toolpath, timeline);
-  std::vector<char> cutting(static_cast<std::size_t>(model.path.rows()), 0);
-  {
-    std::size_t row = 0;
-    for (std::size_t m = 0; m < toolpath.moves.size(); ++m) {
-      const auto count = levelset::move_polyline(toolpath.moves[m], 0.01).size() - (m > 0 ? 1 : 0);
-      for (std::size_t k = 0; k < count; ++k, ++row)
-        if (row > 0) cutting[row - 1] = toolpath.moves[m].cutting();  // segment (row - 1, row) belongs to move m
-    }
-  }
+  std::vector<char> cutting;
+  model.path = path_waypoints(toolpath, timeline, cutting);
   const levelset::Tool tool = build_tool(c);
   model.tool_shape = c.tool_kind == "ball" ? reduce::ToolShape::Ball : reduce::ToolShape::Flat;
   model.tool_radius = tool.radius;
