@@ -4,6 +4,7 @@
 #include "apps/default_case.hpp"
 #include "support/input_error.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -162,6 +163,75 @@ void read_clamps(CaseReader& r, Case& c) {
   }
 }
 
+std::array<double, 3> triple(CaseReader& r, const std::string& key, std::array<double, 3> fallback) {
+  const auto v = r.reals(key, Range{}, std::vector<double>(fallback.begin(), fallback.end()));
+  if (v.size() != 3) r.fail(key, "expected [x, y, z]");
+  return {v[0], v[1], v[2]};
+}
+
+int profile_count(const std::string& parity, int max_degree) {
+  int count = 0;
+  for (int j = 2; j <= max_degree; ++j)
+    if (parity == "all" || (parity == "even") == (j % 2 == 0)) ++count;
+  return count;
+}
+
+void read_truth(CaseReader& r, Case& c) {
+  c.has_truth = r.has("truth.parity") || r.has("truth.max_degree") || r.has("truth.sigma11") || r.has("truth.sigma22") || r.has("truth.table");
+  c.truth_amplitude = r.real("truth.amplitude", Range::closed(-100, 100), 1.0);
+  if (!c.has_truth) return;
+  c.truth_parity = r.choice("truth.parity", {"even", "odd", "all"}, c.parity);
+  c.truth_max_degree = static_cast<int>(r.integer("truth.max_degree", c.truth_parity == "odd" ? 3 : 2, 20));
+  if (r.has("truth.table")) {
+    c.truth_table = relative_to(r.origin(), r.text("truth.table"));
+    if (r.has("truth.sigma11") || r.has("truth.sigma22")) r.fail("truth.table", "give either a table or sigma11/sigma22 coefficients, not both");
+    return;
+  }
+  const int count = profile_count(c.truth_parity, c.truth_max_degree);
+  c.truth_sigma11 = r.reals("truth.sigma11", Range::closed(-2000, 2000));
+  c.truth_sigma22 = r.reals("truth.sigma22", Range::closed(-2000, 2000));
+  for (const char* key : {"truth.sigma11", "truth.sigma22"}) {
+    const auto& v = std::string(key) == "truth.sigma11" ? c.truth_sigma11 : c.truth_sigma22;
+    if (static_cast<int>(v.size()) != count)
+      r.fail(key, "has " + std::to_string(v.size()) + " coefficients; the " + c.truth_parity + " basis up to degree " + std::to_string(c.truth_max_degree) +
+                      " has " + std::to_string(count));
+  }
+}
+
+void read_closed_loop(CaseReader& r, Case& c) {
+  c.sensor_offset = triple(r, "sensor.offset", c.sensor_offset);
+  c.sensor_angle = r.real("sensor.angle", Range::closed(-180, 180), c.sensor_angle);
+  c.sensor_length = r.real("sensor.length", Range::positive(), c.sensor_length);
+  c.sensor_points = static_cast<int>(r.integer("sensor.points", 2, 100000, c.sensor_points));
+  c.sensor_range = r.real("sensor.range", Range::positive(), c.sensor_range);
+  c.sensor_period = r.real("sensor.period", Range::closed(1e-4, 10), c.sensor_period);
+  c.sensor_noise = r.real("sensor.noise", Range::closed(0, 10), c.sensor_noise);
+  c.sensor_offset_error = triple(r, "sensor.offset_error", c.sensor_offset_error);
+  c.sensor_angle_error = r.real("sensor.angle_error", Range::closed(-90, 90), c.sensor_angle_error);
+  c.sensor_seed = static_cast<std::uint32_t>(r.integer("sensor.seed", 0, 4294967295LL, c.sensor_seed));
+  c.desync = r.real("sync.desync", Range::closed(0, 60), c.desync);
+  c.feed_override = r.real("sync.feed_override", Range::open(0, 10), c.feed_override);
+  c.correct = r.boolean("control.correct", c.correct);
+  c.refresh_rate = r.real("control.refresh_rate", Range::closed(0.01, 10000), c.refresh_rate);
+  c.max_offset_rate = r.real("control.max_offset_rate", Range::positive(), c.max_offset_rate);
+  c.learning_tolerance = r.real("control.learning_tolerance", Range::positive(), c.learning_tolerance);
+  c.learning_window = static_cast<int>(r.integer("control.learning_window", 1, 10000, c.learning_window));
+  c.reading_range = r.real("control.reading_range", Range::positive(), c.reading_range);
+  c.prior_scale = r.real("control.prior_scale", Range::positive(), c.prior_scale);
+  c.model_tolerance = r.real("control.model_tolerance", Range::positive(), c.model_tolerance);
+  c.run_scale = r.choice("run.scale", {"quick", "seed"}, "quick");
+  if (r.has("run.quick")) c.run_quick = r.strings("run.quick");
+  for (const auto& o : c.run_quick)
+    if (o.find('=') == std::string::npos) r.fail("run.quick", "expected \"key=value\" overrides, got '" + o + "'");
+  c.path_tolerance = r.real("run.path_tolerance", Range::positive(), c.path_tolerance);
+  c.shape_tolerance = r.real("run.shape_tolerance", Range::positive(), c.shape_tolerance);
+  if (r.has("run.shape_vtk_passes"))
+    for (double v : r.reals("run.shape_vtk_passes", Range::closed(1, 100000))) {
+      if (v != std::floor(v)) r.fail("run.shape_vtk_passes", "expected pass numbers (whole numbers from 1)");
+      c.shape_vtk_passes.push_back(static_cast<int>(v));
+    }
+}
+
 }  // namespace
 
 Case load_case(const std::optional<std::filesystem::path>& path, const std::vector<std::string>& overrides) {
@@ -194,6 +264,8 @@ Case case_from_text(const std::string& text, const std::string& origin, const st
   c.voxel_size = r.real("removal.voxel_size", Range::positive(), 0.0);
   c.frames = static_cast<int>(r.integer("removal.frames", 0, 10000, 20));
   read_clamps(r, c);
+  read_truth(r, c);
+  read_closed_loop(r, c);
   r.finish();
   c.resolved_toml = r.resolved_text();
   return c;

@@ -6,6 +6,8 @@
 #include <array>
 #include <filesystem>
 #include <optional>
+#include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -71,6 +73,42 @@ struct Case {
   int frames = 0;                 // VTK frames of the remaining part written by drom removal
 
   std::vector<ClampSpec> clamps;
+
+  // [truth]: the real part of drom run, whose profile need not be a combination of the basis.
+  // Absent: the [stress] profile.
+  bool has_truth = false;
+  std::string truth_parity;
+  int truth_max_degree = 0;
+  std::vector<double> truth_sigma11, truth_sigma22;
+  std::filesystem::path truth_table;
+  double truth_amplitude = 1;  // multiplies the truth's stresses (and so its displacements)
+
+  // [sensor]: the laser sheet (design.md §7).
+  std::array<double, 3> sensor_offset{50, 0, 80};
+  double sensor_angle = 90, sensor_length = 80, sensor_range = 200, sensor_period = 0.1, sensor_noise = 0.05;
+  int sensor_points = 800;
+  std::array<double, 3> sensor_offset_error{0, 0, 0};
+  double sensor_angle_error = 0;
+  std::uint32_t sensor_seed = 2015;
+
+  // [sync]: how the predictor knows where the tool is.
+  double desync = 0, feed_override = 1;
+
+  // [control]: the predictor and the offsets it commands.
+  bool correct = true;
+  double refresh_rate = 10;          // Hz
+  double max_offset_rate = 1;        // mm/s
+  double learning_tolerance = 0.01;  // mm
+  int learning_window = 5;
+  double reading_range = 1;          // mm
+  double prior_scale = 1;
+  double model_tolerance = 1e-3;     // mm: the POD bound drom run reduces the offline database to
+
+  // [run]: what drom run does with the case.
+  std::string run_scale = "quick";               // quick: apply run.quick first; seed: the case as written
+  std::vector<std::string> run_quick;            // "key=value" overrides for a run of a few minutes
+  double path_tolerance = 1e-3, shape_tolerance = 0.02;  // mm: the headline targets
+  std::vector<int> shape_vtk_passes;             // passes whose final-shape predictions go to VTK
 };
 
 // Reads a case from a file, or the embedded default (flat plate) when `path` is empty, applies the

@@ -5,6 +5,7 @@
 #include <toml++/toml.h>
 
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <set>
 #include <sstream>
@@ -262,6 +263,24 @@ std::string CaseReader::resolved_text() const {
   std::ostringstream s;
   s << toml::toml_formatter{impl_->root};
   return s.str();
+}
+
+std::string case_text_without(const std::string& text, const std::vector<std::string>& tables, const std::vector<std::string>& path_keys,
+                              const std::string& base) {
+  toml::table root = toml::parse(text);
+  for (const auto& t : tables) root.erase(t);
+  for (const auto& key : path_keys) {
+    const auto dot = key.find('.');
+    auto* table = root[key.substr(0, dot)].as_table();
+    if (!table) continue;
+    auto* value = (*table)[key.substr(dot + 1)].as_string();
+    if (!value) continue;
+    std::filesystem::path p(value->get());
+    if (p.is_relative() && !base.empty() && base.front() != '<') *value = (std::filesystem::absolute(std::filesystem::path(base).parent_path()) / p).lexically_normal().string();
+  }
+  std::ostringstream s;
+  s << toml::toml_formatter{root};
+  return s.str() + "\n";
 }
 
 }  // namespace drom::app

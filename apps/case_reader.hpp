@@ -59,4 +59,10 @@ class CaseReader {
   std::string origin_;
 };
 
+// `text` (TOML) without the named top-level tables, with the named string keys (dotted) made absolute
+// paths relative to `base` (so the text can be written elsewhere). Deterministic: the same input
+// gives the same bytes.
+std::string case_text_without(const std::string& text, const std::vector<std::string>& tables, const std::vector<std::string>& path_keys,
+                              const std::string& base);
+
 }  // namespace drom::app

@@ -48,6 +48,15 @@ PartModel build_part(const Case& c) {
     part.profile = fem::fit_profile(fem::read_profile_table(c.table), part.shape.thickness(), part.degrees);
   else
     part.profile = {part.degrees, c.sigma11, c.sigma22};
+  part.truth_profile = part.profile;
+  if (c.has_truth) {
+    const auto degrees = fem::legendre_degrees(c.truth_parity == "odd" ? fem::ProfileParity::Odd : c.truth_parity == "even" ? fem::ProfileParity::Even : fem::ProfileParity::All,
+                                               c.truth_max_degree);
+    part.truth_profile = c.truth_table.empty() ? fem::StressProfile{degrees, c.truth_sigma11, c.truth_sigma22}
+                                               : fem::fit_profile(fem::read_profile_table(c.truth_table), part.shape.thickness(), degrees);
+  }
+  for (auto& v : part.truth_profile.sigma11) v *= c.truth_amplitude;
+  for (auto& v : part.truth_profile.sigma22) v *= c.truth_amplitude;
   return part;
 }
 

@@ -19,6 +19,7 @@ struct PartModel {
   fem::Material material;
   std::vector<int> degrees;     // the Legendre basis
   fem::StressProfile profile;   // the case's profile in that basis
+  fem::StressProfile truth_profile;  // the real part's ([truth], times its amplitude; else the case's)
 };
 
 PartModel build_part(const Case& c);

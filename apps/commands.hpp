@@ -25,6 +25,7 @@ struct CommandOptions {
 };
 
 int run_command(const CommandOptions& options);    // drom run
+int layer_command(const CommandOptions& options);  // drom layer
 int mesh_command(const CommandOptions& options);   // drom mesh
 int check_command(const CommandOptions& options);  // drom check
 int removal_command(const CommandOptions& options);  // drom removal

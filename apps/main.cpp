@@ -19,7 +19,8 @@ int main(int argc, char** argv) {
     int (*run)(const drom::app::CommandOptions&);
   };
   const Sub subs[] = {
-      {"run", "run the main job on a case (default: the embedded flat-plate case)", drom::app::run_command},
+      {"run", "the closed loop on a case (default: the embedded flat-plate case): offline, model, truth, corrected machining", drom::app::run_command},
+      {"layer", "the FE core on uniform layer removal, against the closed form", drom::app::layer_command},
       {"removal", "compute the material each tool station removes, on the case's mesh", drom::app::removal_command},
       {"offline", "simulate the machining once per unit stress profile: the snapshot database (B1, B2)", drom::app::offline_command},
       {"truth", "simulate the machining for the case's own stress profile, with full fields", drom::app::truth_command},

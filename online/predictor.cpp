@@ -26,34 +26,18 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
   if (!(settings_.noise_sd > 0) || !(settings_.prior_scale > 0) || !(settings_.path_sample > 0) || settings_.learning_window < 1)
     throw std::invalid_argument("predictor settings: noise_sd, prior_scale and path_sample must be > 0, learning_window >= 1");
   const int n = model_.target.node_count();
-  // U1_k at each node's cut time: the reference of the differenced basis.
-  cut_values_.setZero(n, r_);
-  for (int k = 0; k < r_; ++k) {
-    const auto& h = model_.histories[static_cast<std::size_t>(k)];
-    for (int i = 0; i < n; ++i)
-      if (std::isfinite(model_.target_cut_time[i])) cut_values_(i, k) = h.at(i, model_.target_cut_time[i]);
-  }
   prior_precision_ = (settings_.prior_scale * model_.prior_sd).array().square().inverse();
-  // A face is cut when its last node is (never, if one of them never is).
-  face_cut_time_.assign(static_cast<std::size_t>(model_.target.face_count()), 0.0);
-  for (int f = 0; f < model_.target.face_count(); ++f)
-    for (int q = 0; q < model_.target.nodes_per_face(); ++q)
-      face_cut_time_[static_cast<std::size_t>(f)] = std::max(face_cut_time_[static_cast<std::size_t>(f)],
-                                                             model_.target_cut_time[model_.target.faces()[static_cast<std::size_t>(f * model_.target.nodes_per_face() + q)]]);
-  node_stamp_.assign(static_cast<std::size_t>(n), 0);
-  face_stamp_.assign(static_cast<std::size_t>(model_.target.face_count()), 0);
-  face_slot_.assign(static_cast<std::size_t>(model_.target.face_count()), -1);
-  node_delta_.setZero(n, r_);
+  // The same rule as the model's per-node cut times (drom reduce): the tip down within 2 % of the
+  // depth of the point's nominal altitude.
+  cut_index_ = reduce::CutTimeIndex(model_.path, model_.tool_radius, 0.02 * model_.pocket_depth,
+                                    model_.target.node_count() > 0 ? model_.target.nodes().row(2).maxCoeff() + 0.02 * model_.pocket_depth : 0.0);
   for (const auto& h : model_.histories) {
     if (h.times().size() != model_.histories.front().times().size() || h.times() != model_.histories.front().times())
       throw std::invalid_argument("predictor: the model's histories must share their instants");
-    interval_factors_.emplace_back(h.terms());
-    interval_factors_.emplace_back(h.terms());
     space_by_node_.emplace_back(h.space().transpose());  // a node's terms contiguous: one cache line, not one per term
   }
-  node_cached_.assign(static_cast<std::size_t>(n), 0);
-  node_lo_.setZero(n, r_);
-  node_hi_.setZero(n, r_);
+  instant_values_.setZero(r_, static_cast<Eigen::Index>(n) * kSlots);
+  instant_tag_.assign(static_cast<std::size_t>(n) * kSlots, -1);
   normal_ = Eigen::MatrixXd::Zero(r_, r_);
   rhs_ = Eigen::VectorXd::Zero(r_);
 
@@ -98,6 +82,32 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
   snapshot_.store(std::make_shared<const Snapshot>(Snapshot{Eigen::VectorXd::Zero(r_), false}));
 }
 
+void Predictor::basis_at(const reduce::SurfacePoint& p, double t, double* out) {
+  std::fill(out, out + r_, 0.0);
+  if (r_ == 0) return;
+  const auto& instants = model_.histories.front().times();
+  const auto at = reduce::locate_time(instants, t);
+  const Eigen::Index next = at.i + (instants.size() > 1 ? 1 : 0);
+  for (int q = 0; q < p.count; ++q) {
+    const int node = p.nodes[static_cast<std::size_t>(q)];
+    const double N = p.weights[static_cast<std::size_t>(q)];
+    const double* a = node_at_instant(node, at.i);
+    const double* b = node_at_instant(node, next);
+    for (int k = 0; k < r_; ++k) out[k] += N * ((1 - at.weight) * a[k] + at.weight * b[k]);
+  }
+}
+
+const double* Predictor::node_at_instant(int node, Eigen::Index j) {
+  const std::size_t slot = static_cast<std::size_t>(node) * kSlots + static_cast<std::size_t>(j % kSlots);
+  double* values = instant_values_.col(static_cast<Eigen::Index>(slot)).data();
+  if (instant_tag_[slot] != j) {
+    instant_tag_[slot] = j;
+    for (int k = 0; k < r_; ++k)
+      values[k] = space_by_node_[static_cast<std::size_t>(k)].col(node).dot(model_.histories[static_cast<std::size_t>(k)].time().row(j));
+  }
+  return values;
+}
+
 double Predictor::applied_offset_at(double t) const {
   // The offset in force at t: the last one recorded at or before t (none before the first: 0).
   auto it = std::upper_bound(offsets_.begin(), offsets_.end(), t, [](double v, const auto& e) { return v < e.first; });
@@ -126,103 +136,105 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
   set_offset(t, pose.applied_offset);
   const auto snap = snapshot();
 
-  // The profile's time factors once, then the differenced basis per touched node, then per face the
-  // sums of N N^T and N m: the normal equations get D_f^T (sum N N^T) D_f per face, not per point.
-  // Scratch arrays are members, stamped per profile, so nothing is allocated per point.
-  if (++stamp_ == 0) {
-    std::fill(node_stamp_.begin(), node_stamp_.end(), 0);
-    std::fill(face_stamp_.begin(), face_stamp_.end(), 0);
-    stamp_ = 1;
+  // Per point, the differenced basis g = U1(x, t) - U1(x, t_cut(x)) at the point's own cut time; U1 is
+  // linear in time between stored instants, so both terms are blends of nodal values at instants,
+  // which the per-node cache serves. The normal equations then get G^T G in one rank update.
+  u_.resize(r_);
+  const Eigen::VectorXd no_instants;
+  const Eigen::VectorXd& instants = r_ > 0 ? model_.histories.front().times() : no_instants;
+  if (G_.rows() < static_cast<Eigen::Index>(points.size())) {
+    G_.resize(static_cast<Eigen::Index>(points.size()), r_);
+    m_.resize(static_cast<Eigen::Index>(points.size()));
   }
-  // U1(node, t) is linear in t between two stored instants: each node's values at the interval's two
-  // ends are computed once (r x terms each) and kept while profiles stay in that interval (tens of
-  // profiles at 10 Hz), so a profile pays r per node, not r x terms.
-  const auto interval = r_ > 0 ? reduce::locate_time(model_.histories.front().times(), t) : reduce::TimeInterval{};
-  if (r_ > 0 && model_.histories.front().times().size() > 1 && interval.i != cached_interval_) {
-    cached_interval_ = interval.i;
-    std::fill(node_cached_.begin(), node_cached_.end(), 0);
-    for (int k = 0; k < r_; ++k) {
-      const auto& T = model_.histories[static_cast<std::size_t>(k)].time();
-      interval_factors_[static_cast<std::size_t>(2 * k)] = T.row(interval.i).transpose();
-      interval_factors_[static_cast<std::size_t>(2 * k + 1)] = T.row(interval.i + 1).transpose();
-    }
-  }
-  touched_.clear();
-  const bool offset_varies = !offsets_.empty();  // otherwise 0 everywhere: no need for t_cut
+  // Which cut left the floor depends on w, so on the fit: the points are gathered with the current
+  // fit's picks. While still learning, the fit moves a lot from profile to profile, and a wrong pick
+  // would stay in the normal equations for good: the profile is then gathered again with the fit it
+  // leads to, until the picks settle (at most three times).
   double square_error = 0;
-  int hint = -1;  // consecutive points of a profile mostly share a face
-  for (const auto& pt : points) {
-    if (!std::isfinite(pt.x) || !std::isfinite(pt.y) || !std::isfinite(pt.z)) {
-      ++report.invalid;
-      continue;
-    }
-    const auto p = model_.target.locate(pt.x, pt.y, hint, false);
-    if (!p) {
-      ++report.outside;
-      continue;
-    }
-    hint = p->face;
-    // The differenced basis needs every node of the face already cut.
-    if (!(face_cut_time_[p->face] <= t)) {
-      ++report.not_yet_cut;
-      continue;
-    }
-    double offset = 0;
-    if (offset_varies) {
-      double t_cut = 0;
-      for (int q = 0; q < p->count; ++q) t_cut += p->weights[static_cast<std::size_t>(q)] * model_.target_cut_time[p->nodes[static_cast<std::size_t>(q)]];
-      offset = applied_offset_at(t_cut);
-    }
-    const double m = pt.z - (model_.target.nominal_altitude(*p) + offset);
-    if (std::abs(m) > settings_.reading_range) {
-      ++report.out_of_range;
-      continue;
-    }
-    FaceSums* f;
-    if (face_stamp_[static_cast<std::size_t>(p->face)] != stamp_) {
-      face_stamp_[static_cast<std::size_t>(p->face)] = stamp_;
-      face_slot_[static_cast<std::size_t>(p->face)] = static_cast<int>(touched_.size());
-      if (touched_.size() == face_sums_.size()) face_sums_.emplace_back();
-      touched_.push_back(p->face);
-      f = &face_sums_[touched_.size() - 1];
-      f->face = *p;
-      f->NN.setZero();
-      f->Nm.setZero();
-      for (int q = 0; q < p->count; ++q) {
-        const int node = p->nodes[static_cast<std::size_t>(q)];
-        if (node_stamp_[static_cast<std::size_t>(node)] != stamp_) {
-          node_stamp_[static_cast<std::size_t>(node)] = stamp_;
-          if (!node_cached_[static_cast<std::size_t>(node)]) {
-            node_cached_[static_cast<std::size_t>(node)] = 1;
-            for (int k = 0; k < r_; ++k) {
-              const auto a = space_by_node_[static_cast<std::size_t>(k)].col(node);
-              node_lo_(node, k) = a.dot(interval_factors_[static_cast<std::size_t>(2 * k)]);
-              node_hi_(node, k) = a.dot(interval_factors_[static_cast<std::size_t>(2 * k + 1)]);
-            }
-          }
-          node_delta_.row(node) = (1 - interval.weight) * node_lo_.row(node) + interval.weight * node_hi_.row(node) - cut_values_.row(node);
-        }
-        f->predicted[q] = node_delta_.row(node).dot(snap->alpha);
+  Eigen::Index used = 0;
+  auto gather = [&](const Eigen::VectorXd& alpha) {
+    report = ProfileReport{};
+    square_error = 0;
+    used = 0;
+    int hint = -1;  // consecutive points of a profile mostly share a face
+    for (const auto& pt : points) {
+      if (!std::isfinite(pt.x) || !std::isfinite(pt.y) || !std::isfinite(pt.z)) {
+        ++report.invalid;
+        continue;
       }
-      for (int q = p->count; q < 9; ++q) f->predicted[q] = 0;
-    } else {
-      f = &face_sums_[static_cast<std::size_t>(face_slot_[static_cast<std::size_t>(p->face)])];
+      const auto p = model_.target.locate(pt.x, pt.y, hint, false);
+      if (!p) {
+        ++report.outside;
+        continue;
+      }
+      hint = p->face;
+      const double s0 = model_.target.nominal_altitude(*p);
+      cut_index_.covers({pt.x, pt.y, s0}, t, covers_);
+      if (covers_.empty()) {
+        ++report.not_yet_cut;
+        continue;
+      }
+      // The cut that left the floor here: of the tool's covers of the point, the lowest tool bottom
+      // in the material's frame, offset(tau) - w(x, tau). Over a cover the offset is a step function
+      // and the fit linear between the model's instants, so the candidates are the cover's ends, the
+      // offset changes (both sides) and the instants inside it.
+      double cut_offset = 0;
+      double t_cut = covers_.front().first, lowest = std::numeric_limits<double>::infinity();
+      for (const auto& [entry, exit] : covers_) {
+        candidates_.assign({entry, exit});
+        for (auto it = std::upper_bound(offsets_.begin(), offsets_.end(), entry, [](double v, const auto& e) { return v < e.first; });
+             it != offsets_.end() && it->first < exit; ++it)
+          candidates_.push_back(it->first);
+        for (const double* c = std::upper_bound(instants.data(), instants.data() + instants.size(), entry); c != instants.data() + instants.size() && *c < exit; ++c)
+          candidates_.push_back(*c);
+        for (const double tau : candidates_) {
+          basis_at(*p, tau, u_.data());
+          const double w_fit = u_.dot(alpha);
+          for (const double o : {applied_offset_at(tau), applied_offset_at(std::nextafter(tau, -1e300))}) {
+            const double bottom = o - w_fit;
+            if (bottom < lowest - 1e-12) lowest = bottom, t_cut = tau, cut_offset = o;
+          }
+        }
+      }
+      const double m = pt.z - (s0 + cut_offset);
+      if (std::abs(m) > settings_.reading_range) {
+        ++report.out_of_range;
+        continue;
+      }
+      auto g = G_.row(used);
+      basis_at(*p, t, g.data());
+      basis_at(*p, t_cut, u_.data());
+      g -= u_.transpose();
+      m_[used] = m;
+      const double e = m - g.dot(snap->alpha);
+      square_error += e * e;
+      ++used;
     }
-    const Eigen::Map<const Eigen::Matrix<double, 9, 1>> N(p->weights.data());  // zero past p->count
-    f->NN.noalias() += N * N.transpose();
-    f->Nm += N * m;
-    const double e = m - N.dot(f->predicted);
-    square_error += e * e;
-    ++report.used;
-  }
+  };
   const double w = 1 / (settings_.noise_sd * settings_.noise_sd);
-  for (std::size_t i = 0; i < touched_.size(); ++i) {
-    const FaceSums& f = face_sums_[i];
-    const int c = f.face.count;
-    Eigen::MatrixXd D(c, r_);
-    for (int q = 0; q < c; ++q) D.row(q) = node_delta_.row(f.face.nodes[static_cast<std::size_t>(q)]);
-    normal_.noalias() += w * (D.transpose() * f.NN.topLeftCorner(c, c) * D);
-    rhs_.noalias() += w * (D.transpose() * f.Nm.head(c));
+  auto solve_with_profile = [&] {
+    const auto G = G_.topRows(used);
+    Eigen::MatrixXd precision = normal_;
+    precision.selfadjointView<Eigen::Lower>().rankUpdate(G.transpose(), w);
+    precision.diagonal() += prior_precision_;
+    return Eigen::VectorXd(precision.selfadjointView<Eigen::Lower>().llt().solve(rhs_ + w * (G.transpose() * m_.head(used))));
+  };
+  Eigen::VectorXd pick = snap->alpha;
+  gather(pick);
+  for (int again = 0; !learned_ && used > 0 && again < 3; ++again) {
+    const Eigen::VectorXd next = solve_with_profile();
+    if ((next - pick).norm() <= 1e-9 * (1 + next.norm())) break;
+    pick = next;
+    const double first_square_error = square_error;
+    gather(pick);
+    square_error = first_square_error;  // the predictive residual is the fit's before this profile
+  }
+  report.used = static_cast<int>(used);
+  if (used > 0) {
+    const auto G = G_.topRows(used);
+    normal_.selfadjointView<Eigen::Lower>().rankUpdate(G.transpose(), w);
+    normal_.triangularView<Eigen::StrictlyUpper>() = normal_.transpose().eval();
+    rhs_.noalias() += w * (G.transpose() * m_.head(used));
   }
   points_ += report.used;
   ++profiles_;

@@ -16,6 +16,7 @@
 // Threads: one acquisition thread calls add_profile; one control thread calls tool_offset (which
 // keeps the rate limiter's state); any thread may call the const queries. The estimate is published
 // as an immutable snapshot, so a query never waits for a profile being ingested.
+#include "reduce/cut_time.hpp"
 #include "reduce/light_model.hpp"
 
 #include <Eigen/Core>
@@ -122,7 +123,6 @@ class Predictor {
   reduce::LightModel model_;
   PredictorSettings settings_;
   int r_ = 0;
-  Eigen::MatrixXd cut_values_;  // target nodes x r: U1_k(node, t_cut(node))
   Eigen::VectorXd prior_precision_;
   // Path samples for the offsets: program time, and per sample U1_k and its x / y derivatives at the
   // tool's position, plus the nominal surface's slope there (ball end mills).
@@ -130,27 +130,25 @@ class Predictor {
   Eigen::MatrixXd sample_w_, sample_wx_, sample_wy_;  // samples x r
   Eigen::VectorXd sample_inside_, sample_s0x_, sample_s0y_;
 
-  std::vector<double> face_cut_time_;  // per target face: when its last node was cut
+  // When the tool cut any point of the target (a face's nodes may have been cut passes apart, so the
+  // differenced basis is taken at the point's own cut time, not interpolated from its nodes').
+  reduce::CutTimeIndex cut_index_;
 
   mutable std::mutex ingest_;
-  // add_profile's scratch (under ingest_): per face touched by the profile, sum N N^T, sum N m and the
-  // current fit's nodal prediction; per touched node, the differenced basis.
-  struct FaceSums {
-    reduce::SurfacePoint face;
-    Eigen::Matrix<double, 9, 9> NN;
-    Eigen::Matrix<double, 9, 1> Nm, predicted;
-  };
-  std::vector<FaceSums> face_sums_;
-  std::vector<int> touched_, face_slot_;
-  std::vector<unsigned> node_stamp_, face_stamp_;
-  unsigned stamp_ = 0;
-  Eigen::MatrixXd node_delta_;  // target nodes x r
-  // U1 at the two ends of the current time interval, per node, computed when first needed there.
-  Eigen::Index cached_interval_ = -1;
-  std::vector<Eigen::VectorXd> interval_factors_;  // per mode: time factors at the interval's start, end
-  std::vector<Eigen::MatrixXd> space_by_node_;     // per mode: its space factors, terms x nodes
-  std::vector<char> node_cached_;
-  Eigen::MatrixXd node_lo_, node_hi_;  // target nodes x r
+  // add_profile's scratch (under ingest_). U1 at a node and a stored instant j, all r modes, kept in
+  // a small per-node cache (slot j mod kSlots): a profile touches a few instants per node (its own
+  // time interval, and the cut times of the two or three passes under the sheet).
+  static constexpr int kSlots = 8;
+  const double* node_at_instant(int node, Eigen::Index j);
+  void basis_at(const reduce::SurfacePoint& p, double t, double* out);  // U1_k(x, t), k = 1..r
+  std::vector<std::pair<double, double>> covers_;
+  std::vector<double> candidates_;
+  std::vector<Eigen::MatrixXd> space_by_node_;  // per mode: its space factors, terms x nodes
+  Eigen::MatrixXd instant_values_;              // r x (nodes * kSlots)
+  std::vector<Eigen::Index> instant_tag_;       // the instant each slot holds (-1: none)
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> G_;  // the profile's differenced basis, points x r
+  Eigen::VectorXd m_;                           // and its readings net of the commanded altitude
+  Eigen::VectorXd u_;
   Eigen::MatrixXd normal_;  // sum g g^T / sigma^2
   Eigen::VectorXd rhs_;     // sum g m / sigma^2
   long long points_ = 0;

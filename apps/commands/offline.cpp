@@ -117,7 +117,7 @@ int simulate(const CommandOptions& options, bool truth) {
   } catch (const std::invalid_argument& e) {
     throw InputError(c.origin + ": mesh.nz: " + e.what());
   }
-  const std::vector<fem::StressProfile> profiles = truth ? std::vector<fem::StressProfile>{part.profile} : fem::unit_profiles(part.degrees);
+  const std::vector<fem::StressProfile> profiles = truth ? std::vector<fem::StressProfile>{part.truth_profile} : fem::unit_profiles(part.degrees);
   const auto P = static_cast<Eigen::Index>(profiles.size());
   const std::string mode = truth ? "truth" : "offline";
   const std::uint64_t case_hash = fnv1a(c.resolved_toml.data(), c.resolved_toml.size());
@@ -277,13 +277,15 @@ int simulate(const CommandOptions& options, bool truth) {
     h5.write("connectivity", connectivity, static_cast<std::size_t>(mesh.element_count()), static_cast<std::size_t>(fem::nodes_per_element(mesh.type)));
     h5.write("final_activity", activity.back(), activity.back().size(), 1);
     if (truth) {
-      std::vector<double> coefficients(part.profile.sigma11);
-      coefficients.insert(coefficients.end(), part.profile.sigma22.begin(), part.profile.sigma22.end());
-      h5.write("profile_coefficients", coefficients, 2, part.profile.degrees.size());
+      const auto& truth_profile = part.truth_profile;
+      std::vector<double> coefficients(truth_profile.sigma11);
+      coefficients.insert(coefficients.end(), truth_profile.sigma22.begin(), truth_profile.sigma22.end());
+      h5.write("profile_coefficients", coefficients, 2, truth_profile.degrees.size());
     } else {
       h5.write("unit_profiles", unit, static_cast<std::size_t>(P), 2);
     }
-    std::vector<double> degrees(part.degrees.begin(), part.degrees.end());
+    const auto& written_degrees = truth ? part.truth_profile.degrees : part.degrees;
+    std::vector<double> degrees(written_degrees.begin(), written_degrees.end());
     h5.write("profile_degrees", degrees, degrees.size(), 1);
     h5.attribute("kind", mode);
     h5.attribute("case", c.resolved_toml);

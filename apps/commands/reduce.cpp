@@ -12,6 +12,7 @@
 #include "fem/node_sets.hpp"
 #include "fem/vtk_output.hpp"
 #include "levelset/toolpath.hpp"
+#include "reduce/cut_time.hpp"
 #include "reduce/model_reduction.hpp"
 #include "support/hdf5_reader.hpp"
 #include "support/input_error.hpp"
@@ -85,31 +86,6 @@ Eigen::MatrixXd path_waypoints(const levelset::Toolpath& path, const levelset::P
   Eigen::MatrixXd w(static_cast<Eigen::Index>(rows.size()), 4);
   for (std::size_t i = 0; i < rows.size(); ++i) w.row(static_cast<Eigen::Index>(i)) = rows[i].transpose();
   return w;
-}
-
-// First program time at which the tool, its tip down at the node's altitude, covers the node
-// (horizontal distance <= radius); +inf if it never does.
-double first_cover_time(const Eigen::MatrixXd& path, const std::vector<char>& cutting, const Eigen::Vector3d& node, double radius, double z_tolerance) {
-  for (Eigen::Index i = 0; i + 1 < path.rows(); ++i) {
-    if (!cutting[static_cast<std::size_t>(i)]) continue;
-    const Eigen::Vector2d a = path.row(i).head<2>().transpose(), b = path.row(i + 1).head<2>().transpose(), p = node.head<2>();
-    if (std::min(path(i, 2), path(i + 1, 2)) > node.z() + z_tolerance) continue;  // the tip is not down there
-    const Eigen::Vector2d d = b - a, f = a - p;
-    const double A = d.squaredNorm(), B = 2 * f.dot(d), C = f.squaredNorm() - radius * radius;
-    double lambda;
-    if (C <= 0) lambda = 0;
-    else if (A == 0) continue;
-    else {
-      const double disc = B * B - 4 * A * C;
-      if (disc < 0) continue;
-      lambda = (-B - std::sqrt(disc)) / (2 * A);
-      if (lambda < 0 || lambda > 1) continue;
-    }
-    const double z = path(i, 2) + lambda * (path(i + 1, 2) - path(i, 2));
-    if (z > node.z() + z_tolerance) continue;
-    return path(i, 3) + lambda * (path(i + 1, 3) - path(i, 3));
-  }
-  return std::numeric_limits<double>::infinity();
 }
 
 }  // namespace
@@ -187,7 +163,7 @@ int reduce_command(const CommandOptions& options) {
   model.target_cut_time.resize(static_cast<Eigen::Index>(nt));
   const double z_tolerance = 0.02 * c.pocket_depth;
   for (std::size_t i = 0; i < nt; ++i)
-    model.target_cut_time[static_cast<Eigen::Index>(i)] = first_cover_time(model.path, cutting, target_xyz.col(static_cast<Eigen::Index>(i)), tool.radius, z_tolerance);
+    model.target_cut_time[static_cast<Eigen::Index>(i)] = reduce::first_cover_time(model.path, cutting, target_xyz.col(static_cast<Eigen::Index>(i)), tool.radius, z_tolerance);
   db.program_start = 0;
 
   // 4. Reduction.

@@ -1,146 +1,115 @@
-// drom run: the main job. Today (issue 2) it goes as far as the FE core: equilibrate the case's
-// residual stress, solve the intact clamped stock, then the stock thinned by the pocket depth
-// everywhere, clamped and then free, and compare the free plate with the closed form.
-#include "apps/case_setup.hpp"
+// drom run: the main job, the seed's §3.5 experiment (design.md §6-§7).
+//   1. the case at the run's scale ([run] scale = "quick": a few minutes on two cores; "seed": as written);
+//   2. offline snapshots of the basis's unit profiles, and the light model (drom offline, drom reduce);
+//   3. the truth: the same machining with the [truth] profile, a profile outside the basis;
+//   4. the closed loop twice, on the same sensor noise: offsets commanded (with correction) and held
+//      at 0 (without), the predictor learning in both;
+//   5. outputs: per-pass errors, final-shape predictions against the truth, offsets, the corrected
+//      program, summary.json, and a short table on stdout.
+// Stages 2-3 are kept under --out and reused while the case that made them is unchanged, so a rerun
+// with other sensor or control settings costs only the loop.
+#include "apps/closed_loop_report.hpp"
+#include "apps/closed_loop_setup.hpp"
 #include "apps/commands.hpp"
 #include "apps/summary.hpp"
-#include "fem/elastic_problem.hpp"
-#include "fem/layer_removal.hpp"
-#include "fem/node_sets.hpp"
-#include "fem/supports.hpp"
-#include "fem/vtk_output.hpp"
 #include "support/resources.hpp"
 
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <thread>
 
 namespace drom::app {
 
 namespace {
 
-class Steps {
- public:
-  Steps(int total, bool quiet) : total_(total), quiet_(quiet), start_(std::chrono::steady_clock::now()) {}
-  void begin(const std::string& what) {
-    if (!quiet_) std::cerr << "[" << ++done_ << "/" << total_ << " " << elapsed() << " s] " << what << "\n";
-  }
-  double elapsed() const {
-    return std::round(seconds_since(start_) * 10) / 10;
-  }
-
- private:
-  int total_, done_ = 0;
-  bool quiet_;
-  std::chrono::steady_clock::time_point start_;
-};
-
-// Writes the problem's state right after its solve (the activity must be that state's).
-Eigen::VectorXd record(const std::filesystem::path& out, const fem::ElasticProblem& problem, const std::string& name, Eigen::VectorXd u,
-                       fem::PvdCollection& pvd) {
-  const std::string file = "run_" + name + ".vtu";
-  fem::write_solution_vtu(out / file, problem, {{"displacement", u}});
-  pvd.add(static_cast<double>(pvd.size()), file);
-  return u;
+nlohmann::json loop_json(const online::ClosedLoopResult& r) {
+  nlohmann::json passes = nlohmann::json::array();
+  for (const auto& p : r.passes)
+    passes.push_back({{"pass", p.pass},
+                      {"mean_abs_error_mm", p.mean_abs_error},
+                      {"max_abs_error_mm", p.max_abs_error},
+                      {"max_abs_distortion_mm", p.max_abs_distortion},
+                      {"final_shape_max_error_mm", p.shape_max_error},
+                      {"final_shape_rms_error_mm", p.shape_rms_error},
+                      {"band95_coverage", p.shape_band_coverage},
+                      {"learned", p.learned},
+                      {"profiles", p.profiles},
+                      {"points_used", p.points_used}});
+  return {{"passes", passes},
+          {"profiles", r.profiles},
+          {"points", {{"used", r.points.used}, {"outside_target", r.points.outside}, {"not_yet_cut", r.points.not_yet_cut}, {"invalid", r.points.invalid},
+                      {"out_of_range", r.points.out_of_range}}},
+          {"learned_at_program_time_s", r.learned_at},
+          {"alpha", std::vector<double>(r.estimate.alpha.data(), r.estimate.alpha.data() + r.estimate.alpha.size())},
+          {"seconds", r.seconds}};
 }
 
 }  // namespace
 
 int run_command(const CommandOptions& options) {
-  Steps steps(6, options.quiet);
-  steps.begin("reading the case and meshing the part");
-  const Case c = load_case(options.case_path, options.overrides);
-  const PartModel part = build_part(c);
-  const auto clamped = clamp_dofs(c, part);
-  const auto& mesh = part.mesh;
-  if (!options.quiet)
-    std::cerr << "      " << c.name << ": " << mesh.element_count() << " " << fem::element_name(mesh.type) << " elements, " << mesh.dof_count()
-              << " unknowns\n";
+  const auto start = std::chrono::steady_clock::now();
+  const Case c = load_run_case(options);
+  std::filesystem::create_directories(options.out);
+  const ClosedLoopInputs in = prepare_closed_loop(c, options);
 
-  steps.begin("equilibrating the residual stress on the free stock");
-  fem::ElasticProblem problem(mesh, part.shape, part.material, {part.profile});
-  const std::vector<char> all_nodes(static_cast<std::size_t>(mesh.node_count()), 1);
-  problem.equilibrate(fem::isostatic_dofs(mesh, part.shape, all_nodes));
+  // The two loops share everything but the correction; each has its own copy of the truth.
+  online::ClosedLoopSettings with = loop_settings(c), without = with;
+  with.correct = true;
+  without.correct = false;
+  const online::ClosedLoop corrected_loop(in.model, predictor_settings(c), with), uncorrected_loop(in.model, predictor_settings(c), without);
+  const TruthPlay truth_a = in.play(), truth_b = in.play();
+  if (!options.quiet) std::cerr << "drom run: the closed loop, with and without correction (" << corrected_loop.passes().size() << " passes)\n";
+  online::ClosedLoopResult corrected, uncorrected;
+  std::thread side([&] { uncorrected = uncorrected_loop.run(truth_b.part); });
+  corrected = corrected_loop.run(truth_a.part, [&](double f) {
+    if (!options.quiet) std::fprintf(stderr, "\r  %3.0f %%", 100 * f);
+  });
+  side.join();
+  if (!options.quiet) std::fprintf(stderr, "\r  100 %%\n");
 
-  fem::PvdCollection pvd;
-  steps.begin("solving the intact stock, clamped");
-  problem.set_fixed_dofs(clamped);
-  problem.assemble_and_factorize();
-  const Eigen::VectorXd intact = record(options.out, problem, "0_intact", problem.solve().col(0), pvd);
-
-  steps.begin("thinning the stock by the pocket depth everywhere, clamped");
-  const auto criterion = c.removal_criterion == "centroid" ? fem::RemovalCriterion::Centroid : fem::RemovalCriterion::VolumeFraction;
-  problem.set_activity(fem::layer_activity(mesh, part.shape, c.pocket_depth, criterion));
-  problem.assemble_and_factorize();
-  const Eigen::VectorXd thinned = record(options.out, problem, "1_thinned_clamped", problem.solve().col(0), pvd);
-
-  steps.begin("unclamping the thinned stock (3-2-1 supports, best-fit alignment)");
-  const auto live_nodes = problem.live_nodes();
-  problem.set_fixed_dofs(fem::isostatic_dofs(mesh, part.shape, live_nodes));
-  problem.assemble_and_factorize();
-  Eigen::VectorXd aligned = problem.solve().col(0);
-  std::vector<int> live_list;
-  for (int n = 0; n < mesh.node_count(); ++n)
-    if (live_nodes[static_cast<std::size_t>(n)]) live_list.push_back(n);
-  fem::remove_rigid_motion(mesh, live_list, aligned);
-  for (int d = 0; d < mesh.dof_count(); ++d)
-    if (problem.orphan_dofs()[static_cast<std::size_t>(d)]) aligned[d] = 0;
-  const Eigen::VectorXd free_shape = record(options.out, problem, "2_thinned_free", aligned, pvd);
-
-  steps.begin("writing summary.json");
-  pvd.write(options.out / "run.pvd");
-
-  auto max_vertical = [](const Eigen::VectorXd& u) {
-    double m = 0;
-    for (Eigen::Index i = 2; i < u.size(); i += 3) m = std::max(m, std::abs(u[i]));
-    return m;
-  };
+  auto files = write_loop_outputs(options.out, c, in.model, truth_a.part, corrected, uncorrected);
+  files.push_back("summary.json");
+  const Headline h = headline(corrected, uncorrected);
   nlohmann::json summary = {
       {"command", "run"},
-      {"stage", "fem core: intact and uniformly thinned stock (the pipeline's later stages are not built yet)"},
       {"case", c.name},
       {"case_origin", c.origin},
-      {"mesh", {{"element", fem::element_name(mesh.type)}, {"elements", mesh.element_count()}, {"unknowns", mesh.dof_count()}}},
-      {"equilibrium_residual_relative", problem.equilibrium_residual()},
-      {"intact_clamped_max_displacement_mm", intact.cwiseAbs().maxCoeff()},
-      {"thinned_clamped_max_vertical_displacement_mm", max_vertical(thinned)},
-      {"thinned_free_max_vertical_displacement_mm", max_vertical(free_shape)},
-      {"timing_s",
-       {{"total", steps.elapsed()},
-        {"assembly", problem.assembly_seconds()},
-        {"analyze", problem.solver_stats().analyze_seconds},
-        {"factorize", problem.solver_stats().factorize_seconds},
-        {"solve", problem.solver_stats().solve_seconds}}},
-      {"cholmod_peak_memory_mb", static_cast<double>(problem.solver_stats().factor_peak_bytes) / 1048576.0},
+      {"scale", c.run_scale},
+      {"headline", h.to_json()},
+      {"targets", {{"path_tolerance_mm", c.path_tolerance}, {"shape_tolerance_mm", c.shape_tolerance},
+                   {"path_error_from_pass3_met", h.corrected_max_from_3 <= c.path_tolerance},
+                   {"final_shape_by_pass3_met", h.shape_error_pass3 <= c.shape_tolerance}}},
+      {"model", {{"rank", in.model.rank()}, {"error_bound_mm", in.model.error_bound()}, {"tolerance_mm", in.model.tolerance}}},
+      {"truth", {{"amplitude", c.truth_amplitude}, {"max_abs_final_vertical_mm", in.truth.final_displacement.row(2).cwiseAbs().maxCoeff()},
+                 {"max_abs_target_w_mm", in.truth.target_history.cwiseAbs().maxCoeff()}}},
+      {"sensor", {{"noise_mm", c.sensor_noise}, {"period_s", c.sensor_period}, {"angle_deg", c.sensor_angle}, {"offset_mm", c.sensor_offset},
+                  {"offset_error_mm", c.sensor_offset_error}, {"angle_error_deg", c.sensor_angle_error}}},
+      {"sync", {{"desync_s", c.desync}, {"feed_override", c.feed_override}}},
+      {"control", {{"refresh_rate_hz", c.refresh_rate}, {"max_offset_rate_mm_s", c.max_offset_rate}, {"learning_tolerance_mm", c.learning_tolerance}}},
+      {"corrected", loop_json(corrected)},
+      {"uncorrected", loop_json(uncorrected)},
+      {"timing_s", {{"offline", in.offline_seconds}, {"truth", in.truth_seconds}, {"reduce", in.reduce_seconds}, {"loop_corrected", corrected.seconds},
+                    {"loop_uncorrected", uncorrected.seconds}, {"total", seconds_since(start)}}},
+      {"reused", {{"offline", in.reused_offline}, {"truth", in.reused_truth}}},
+      {"peak_memory_mb", static_cast<double>(peak_memory_bytes()) / 1048576.0},
       {"machine", machine_info()},
-      {"files", {"run.pvd", "run_0_intact.vtu", "run_1_thinned_clamped.vtu", "run_2_thinned_free.vtu"}}};
-
-  std::string table;
-  char line[200];
-  if (part.shape.kind() == fem::PartShape::Kind::Plate) {
-    // The free thinned plate is the closed-form case: compare curvatures away from the edges.
-    const auto centre = fem::nodes_where(mesh, [&](const Eigen::Vector3d& p) {
-      return p.z() < 1e-9 && std::abs(p.x() - c.length_x / 2) < 0.2 * c.length_x && std::abs(p.y() - c.length_y / 2) < 0.2 * c.length_y;
-    });
-    const Eigen::Vector2d fe = fem::fit_plate_curvature(mesh, centre, free_shape);
-    const auto exact = fem::layer_removal_closed_form(part.profile, c.thickness, c.pocket_depth, c.young_modulus, c.poisson_ratio);
-    const double err = (fe - exact.curvature).cwiseAbs().maxCoeff() / exact.curvature.cwiseAbs().maxCoeff();
-    summary["free_plate_curvature_per_mm"] = {{"fe", {fe.x(), fe.y()}}, {"closed_form", {exact.curvature.x(), exact.curvature.y()}}, {"relative_error", err}};
-    std::snprintf(line, sizeof line, "  free plate curvature kx, ky  %.4e, %.4e 1/mm (closed form %.4e, %.4e; error %.3f %%)\n", fe.x(), fe.y(),
-                  exact.curvature.x(), exact.curvature.y(), 100 * err);
-    table += line;
-  }
+      {"files", files}};
   write_summary(options.out, summary);
 
   if (!options.quiet) {
-    std::printf("drom run: %s (%d %s elements, %d unknowns)\n", c.name.c_str(), mesh.element_count(), fem::element_name(mesh.type), mesh.dof_count());
-    std::printf("  intact stock, clamped: max |u|          %.2e mm (equilibrium residual %.1e)\n", intact.cwiseAbs().maxCoeff(),
-                problem.equilibrium_residual());
-    std::printf("  thinned by %.3g mm, clamped: max |w|     %.4f mm\n", c.pocket_depth, max_vertical(thinned));
-    std::printf("  thinned, unclamped (best fit): max |w|  %.4f mm\n", max_vertical(free_shape));
-    std::fputs(table.c_str(), stdout);
-    std::printf("  outputs: %s/run.pvd (open in ParaView), summary.json; %.1f s\n", options.out.string().c_str(), steps.elapsed());
+    std::printf("drom run: %s (%s scale), model r = %d, %zu passes, sensor noise %.3g mm\n", c.name.c_str(), c.run_scale.c_str(), in.model.rank(),
+                corrected.passes.size(), c.sensor_noise);
+    std::printf("  %-52s %s\n", "figure", "value");
+    std::printf("  %-52s %.4f mm\n", "path error without correction, max", h.uncorrected_max);
+    if (h.learned_at >= 0) std::printf("  %-52s %.1f s (pass %d)\n", "learned at program time", h.learned_at, h.learned_pass);
+    else std::printf("  %-52s never\n", "learned at program time");
+    std::printf("  %-52s %.2e mm (target %.0e)\n", "path error with correction, max from pass 3", h.corrected_max_from_3, c.path_tolerance);
+    std::printf("  %-52s %.2e mm\n", "path error with correction, mean from pass 3", h.corrected_mean_from_3);
+    std::printf("  %-52s %.4f mm (target %.3g)\n", "final-shape max error, end of pass 3", h.shape_error_pass3, c.shape_tolerance);
+    std::printf("  %-52s %.4f mm (95 %% band covers %.1f %%)\n", "final-shape max error, end", h.shape_error_end, 100 * h.band_coverage_end);
+    std::printf("  outputs in %s: passes.csv/.png, final_shape_error.png, final_shape.pvd, offsets.csv, corrected_program.nc, summary.json (%.0f s)\n",
+                options.out.string().c_str(), seconds_since(start));
   }
   return 0;
 }

@@ -100,10 +100,10 @@ TEST(Cli, UsageErrorsExitWithTwo) {
 TEST(Cli, RunWritesVtkAndSummaryOnACoarsePlate) {
   const auto out = temp_dir() / "run_out";
   std::filesystem::remove_all(out);
-  const auto r = drom("run --set mesh.nx=10 --set mesh.ny=10 --set clamps.0.box=[0,100,0,100] --set clamps.1.box=[900,1000,0,100] "
+  const auto r = drom("layer --set mesh.nx=10 --set mesh.ny=10 --set clamps.0.box=[0,100,0,100] --set clamps.1.box=[900,1000,0,100] "
                       "--set clamps.2.box=[0,100,900,1000] --set clamps.3.box=[900,1000,900,1000] --quiet --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* f : {"run.pvd", "run_0_intact.vtu", "run_1_thinned_clamped.vtu", "run_2_thinned_free.vtu", "summary.json"})
+  for (const char* f : {"layer.pvd", "layer_0_intact.vtu", "layer_1_thinned_clamped.vtu", "layer_2_thinned_free.vtu", "summary.json"})
     EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
   const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
   EXPECT_LT(s["intact_clamped_max_displacement_mm"].get<double>(), 1e-9);
@@ -117,7 +117,7 @@ TEST(Cli, RunWritesVtkAndSummaryOnACoarsePlate) {
     vtkSmartPointer<vtkUnstructuredGrid> grid = reader->GetOutput();
     return grid;
   };
-  const auto intact = read("run_0_intact.vtu"), thinned = read("run_1_thinned_clamped.vtu");
+  const auto intact = read("layer_0_intact.vtu"), thinned = read("layer_1_thinned_clamped.vtu");
   double range[2];
   intact->GetCellData()->GetArray("activity")->GetRange(range);
   EXPECT_EQ(range[0], 1.0);

@@ -2,6 +2,7 @@
 // predictor fed with readings synthesized from the databases themselves: a profile inside the basis
 // (check 2), a truth outside it (check 3), and clear errors for the wrong input.
 #include "online/predictor.hpp"
+#include "tests/online/exact_reading.hpp"
 #include "reduce/light_model.hpp"
 #include "support/hdf5_reader.hpp"
 
@@ -57,7 +58,8 @@ class ModelOnARealDatabase : public ::testing::Test {
 };
 
 // Readings at the target nodes at every station, synthesized from a history w(node, station) of the
-// database: m = w(n, t) - w(n, t_cut(n)), w linear in time between stations and 0 at the start.
+// database (linear in time between stations, 0 at the start) as a noise-free sensor reads the floor
+// (tests/online/exact_reading.hpp), no offsets applied.
 struct Readings {
   std::vector<double> times;
   std::vector<std::vector<drom::online::MeasuredPoint>> profiles;
@@ -68,19 +70,24 @@ Readings readings_from(const drom::reduce::LightModel& model, const Eigen::Vecto
   times << 0, station_times;
   Eigen::MatrixXd history(nodes, stations + 1);
   history << Eigen::VectorXd::Zero(nodes), w;
-  auto at = [&](Eigen::Index n, double t) {
+  auto at = [&](const drom::reduce::SurfacePoint& p, double t) {
     const auto [i, a] = drom::reduce::locate_time(times, t);
-    return (1 - a) * history(n, i) + a * history(n, i + 1);
+    double v = 0;
+    for (int q = 0; q < p.count; ++q) {
+      const int n = p.nodes[static_cast<std::size_t>(q)];
+      v += p.weights[static_cast<std::size_t>(q)] * ((1 - a) * history(n, i) + a * history(n, i + 1));
+    }
+    return v;
   };
+  const drom::test::ExactReading exact(model, at, [](double) { return 0.0; }, {}, std::vector<double>(times.data(), times.data() + times.size()));
   Readings r;
   for (Eigen::Index s = 0; s < stations; ++s) {
     const double t = station_times[s];
     std::vector<drom::online::MeasuredPoint> pts;
     for (Eigen::Index n = 0; n < nodes; ++n) {
-      const double tc = model.target_cut_time[n];
-      if (!(tc <= t)) continue;
       const Eigen::Vector3d x = model.target.nodes().col(n);
-      pts.push_back({x.x(), x.y(), x.z() + at(n, t) - at(n, tc)});
+      const double z = exact(x.x(), x.y(), t);
+      if (std::isfinite(z)) pts.push_back({x.x(), x.y(), z});
     }
     r.times.push_back(t);
     r.profiles.push_back(std::move(pts));

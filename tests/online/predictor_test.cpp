@@ -2,6 +2,7 @@
 // inside the basis, calibration of its uncertainty, dropped points, the learning phase and rate
 // limit, the ball end mill's offset, and concurrent ingest and queries.
 #include "online/predictor.hpp"
+#include "tests/online/exact_reading.hpp"
 #include "tests/reduce/synthetic_model.hpp"
 
 #include <gtest/gtest.h>
@@ -23,20 +24,20 @@ Eigen::Vector3d tool_at(const reduce::LightModel& m, double t) {
   return ((1 - w) * m.path.row(i).head<3>() + w * m.path.row(i + 1).head<3>()).transpose();
 }
 
-// What the sensor reads at (x, y) and time t for coefficients alpha: the measurement model of
-// design.md §6 written with the model's own fields (nodal values, linear in time), with the offsets
-// applied so far given as a step function of time.
+// What the sensor reads at (x, y) and time t for coefficients alpha (tests/online/exact_reading.hpp),
+// w written with the model's own fields, the offsets applied so far a step function of time.
 double reading(const reduce::LightModel& m, const Eigen::VectorXd& alpha, double x, double y, double t, const std::function<double(double)>& offset) {
-  const auto p = m.target.locate(x, y);
-  if (!p) return std::nan("");
-  double t_cut = 0, w = 0;
-  for (int q = 0; q < p->count; ++q) {
-    const int n = p->nodes[static_cast<std::size_t>(q)];
-    const double N = p->weights[static_cast<std::size_t>(q)], tc = m.target_cut_time[n];
-    t_cut += N * tc;
-    for (int k = 0; k < m.rank(); ++k) w += alpha[k] * N * (m.histories[static_cast<std::size_t>(k)].at(n, t) - m.histories[static_cast<std::size_t>(k)].at(n, tc));
-  }
-  return m.target.nominal_altitude(*p) + offset(t_cut) + w;
+  static std::vector<double> changes = {30, 60};  // where the tests' offset functions step
+  const auto w = [&](const reduce::SurfacePoint& p, double tau) {
+    double v = 0;
+    for (int q = 0; q < p.count; ++q)
+      for (int k = 0; k < m.rank(); ++k)
+        v += alpha[k] * p.weights[static_cast<std::size_t>(q)] * m.histories[static_cast<std::size_t>(k)].at(p.nodes[static_cast<std::size_t>(q)], tau);
+    return v;
+  };
+  const Eigen::VectorXd& instants = m.histories.front().times();
+  const test::ExactReading exact(m, w, offset, changes, std::vector<double>(instants.data(), instants.data() + instants.size()));
+  return exact(x, y, t);
 }
 
 // A profile across the feed, 30 mm behind the tool, 80 mm long, 800 points.

@@ -1,0 +1,173 @@
+#include "apps/closed_loop_setup.hpp"
+
+#include "apps/case_reader.hpp"
+#include "apps/case_setup.hpp"
+#include "support/atomic_file.hpp"
+#include "support/hdf5_reader.hpp"
+#include "support/input_error.hpp"
+#include "support/resources.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <map>
+#include <tuple>
+
+namespace drom::app {
+
+Case load_run_case(const CommandOptions& options) {
+  const Case as_written = load_case(options.case_path, options.overrides);
+  if (as_written.run_scale != "quick" || as_written.run_quick.empty()) return as_written;
+  std::vector<std::string> overrides = as_written.run_quick;
+  overrides.insert(overrides.end(), options.overrides.begin(), options.overrides.end());
+  return load_case(options.case_path, overrides);
+}
+
+namespace {
+
+using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+Eigen::MatrixXd read_matrix(const Hdf5Reader& h5, const std::string& name) {
+  const Hdf5Matrix m = h5.matrix(name);
+  return Eigen::Map<const RowMajor>(m.data.data(), static_cast<Eigen::Index>(m.rows), static_cast<Eigen::Index>(m.cols));
+}
+
+const std::vector<std::string> kLoopTables = {"sensor", "sync", "control", "run"};
+const std::vector<std::string> kPathKeys = {"part.stl", "stress.table", "truth.table", "path.gcode"};
+
+// Runs `command` (offline or truth) on `text` in `dir` unless dir/database.h5 already holds it.
+// Returns the seconds spent, or -1 when reused.
+double run_stage(int (*command)(const CommandOptions&), const std::string& text, const std::filesystem::path& dir, const CommandOptions& options) {
+  const auto case_file = dir / "case.toml";
+  const auto database = dir / "database.h5";
+  const std::string resolved = case_from_text(text, case_file.string()).resolved_toml;
+  if (std::filesystem::exists(database)) {
+    if (Hdf5Reader(database).text_attribute("case") == resolved) return -1;
+    std::filesystem::remove(database);  // made by another case: recompute
+  }
+  std::filesystem::create_directories(dir);
+  write_file_atomically(case_file, text);
+  CommandOptions stage;
+  stage.case_path = case_file;
+  stage.out = dir;
+  stage.quiet = options.quiet;
+  stage.threads = options.threads;
+  stage.frames = 0;
+  stage.resume = std::filesystem::exists(dir / ".checkpoint");
+  const auto start = std::chrono::steady_clock::now();
+  if (command(stage) != 0) throw std::runtime_error("the stage in " + dir.string() + " failed");
+  if (!std::filesystem::exists(database)) throw InputError(dir.string() + ": the stage stopped before writing database.h5; run again to resume it");
+  return seconds_since(start);
+}
+
+}  // namespace
+
+ClosedLoopInputs prepare_closed_loop(const Case& c, const CommandOptions& options) {
+  ClosedLoopInputs in;
+  in.shape = build_part(c).shape;
+  // 1. Offline: the basis's unit profiles (nothing of the truth or the loop in its case, so changing
+  //    those reuses it).
+  auto strip = [&](std::vector<std::string> tables) { return case_text_without(c.resolved_toml, tables, kPathKeys, c.origin); };
+  std::vector<std::string> offline_tables = kLoopTables;
+  offline_tables.push_back("truth");
+  if (!options.quiet) std::cerr << "drom run: 1/3 offline snapshots (" << (options.out / "offline").string() << ")\n";
+  in.offline_seconds = run_stage(offline_command, strip(offline_tables), options.out / "offline", options);
+  in.reused_offline = in.offline_seconds < 0;
+
+  // 2. The light model, at the case's control.model_tolerance.
+  if (!options.quiet) std::cerr << "drom run: 2/3 light model (" << (options.out / "model").string() << ")\n";
+  const auto model_file = options.out / "model" / "model.h5";
+  bool reduce_needed = true;
+  if (std::filesystem::exists(model_file)) {
+    const reduce::LightModel existing = reduce::LightModel::read(model_file);
+    reduce_needed = existing.database_hash != Hdf5Reader(options.out / "offline" / "database.h5").text_attribute("content_hash") ||
+                    existing.tolerance != c.model_tolerance;
+  }
+  if (reduce_needed) {
+    CommandOptions stage;
+    stage.case_path = options.out / "offline" / "database.h5";
+    stage.out = model_file;
+    stage.quiet = true;
+    stage.tolerance = c.model_tolerance;
+    const auto start = std::chrono::steady_clock::now();
+    if (reduce_command(stage) != 0) throw std::runtime_error("drom reduce failed");
+    in.reduce_seconds = seconds_since(start);
+  }
+  in.model = reduce::LightModel::read(model_file);
+
+  // 3. The truth: the [truth] profile on the same mesh and program.
+  if (!options.quiet) std::cerr << "drom run: 3/3 truth run (" << (options.out / "truth").string() << ")\n";
+  in.truth_seconds = run_stage(truth_command, strip(kLoopTables), options.out / "truth", options);
+  in.reused_truth = in.truth_seconds < 0;
+  const auto truth_file = options.out / "truth" / "database.h5";
+  const Hdf5Reader h5(truth_file);
+  const Eigen::MatrixXd B1 = read_matrix(h5, "B1"), B2 = read_matrix(h5, "B2"), target_xyz = read_matrix(h5, "target_coordinates"),
+                        nodes = read_matrix(h5, "node_coordinates");
+  in.truth.station_times = read_matrix(h5, "station_time");
+  const Eigen::Index nt = in.model.target.node_count(), ns = in.truth.station_times.size();
+  if (target_xyz.rows() != nt || B1.rows() != nt * ns || B1.cols() != 1)
+    throw InputError(truth_file.string() + ": its target surface does not match the model's (" + std::to_string(target_xyz.rows()) + " nodes against " +
+                     std::to_string(nt) + ")");
+  if ((target_xyz.transpose() - in.model.target.nodes()).cwiseAbs().maxCoeff() > 1e-6)
+    throw InputError(truth_file.string() + ": its target nodes are not the model's (different mesh?)");
+  in.truth.target_history = Eigen::Map<const Eigen::MatrixXd>(B1.data(), nt, ns);
+  in.truth.amplitude = c.truth_amplitude;
+  // The final shape at the model's surface nodes, matched by position.
+  std::map<std::tuple<long long, long long, long long>, Eigen::Index> by_position;
+  auto key = [](const Eigen::Vector3d& x) { return std::make_tuple(std::llround(x.x() * 1e5), std::llround(x.y() * 1e5), std::llround(x.z() * 1e5)); };
+  for (Eigen::Index n = 0; n < nodes.rows(); ++n) by_position[key(nodes.row(n).transpose())] = n;
+  in.truth.final_displacement.resize(3, in.model.shape_nodes.cols());
+  for (Eigen::Index i = 0; i < in.model.shape_nodes.cols(); ++i) {
+    const auto it = by_position.find(key(in.model.shape_nodes.col(i)));
+    if (it == by_position.end()) throw InputError(truth_file.string() + ": a node of the model's final surface is not in the truth's mesh");
+    in.truth.final_displacement.col(i) = B2.block(3 * it->second, 0, 3, 1);
+  }
+  return in;
+}
+
+TruthPlay ClosedLoopInputs::play(double factor) const {
+  TruthPlay p;
+  p.history = std::make_unique<online::SurfaceHistory>(model.target, truth.target_history * factor, truth.station_times);
+  p.part.target = p.history.get();
+  p.part.final_displacement = truth.final_displacement * factor;
+  // The stock's top straight above (x, y), found on the part's parametric outer surface.
+  p.part.stock_top = [shape = shape](double x, double y) -> std::optional<double> {
+    double u = x;
+    for (int k = 0; k < 4; ++k) u += x - shape.from_parametric({u, y, shape.thickness()}).x();
+    if (u < 0 || u > shape.length_u() || y < 0 || y > shape.length_v()) return std::nullopt;
+    return shape.from_parametric({u, y, shape.thickness()}).z();
+  };
+  return p;
+}
+
+online::PredictorSettings predictor_settings(const Case& c) {
+  online::PredictorSettings s;
+  s.noise_sd = std::max(c.sensor_noise, 1e-4);  // a noise-free sensor still has the model's own error
+  s.prior_scale = c.prior_scale;
+  s.reading_range = c.reading_range;
+  s.learning_tolerance = c.learning_tolerance;
+  s.learning_window = c.learning_window;
+  s.max_offset_rate = c.max_offset_rate;
+  return s;
+}
+
+online::ClosedLoopSettings loop_settings(const Case& c) {
+  online::ClosedLoopSettings s;
+  s.sheet.offset = Eigen::Vector3d(c.sensor_offset[0], c.sensor_offset[1], c.sensor_offset[2]);
+  s.sheet.angle_deg = c.sensor_angle;
+  s.sheet.length = c.sensor_length;
+  s.sheet.points = c.sensor_points;
+  s.sheet.range = c.sensor_range;
+  s.errors.offset_error = Eigen::Vector3d(c.sensor_offset_error[0], c.sensor_offset_error[1], c.sensor_offset_error[2]);
+  s.errors.angle_error_deg = c.sensor_angle_error;
+  s.errors.noise_sd = c.sensor_noise;
+  s.period = c.sensor_period;
+  s.refresh_rate = c.refresh_rate;
+  s.desync = c.desync;
+  s.feed_override = c.feed_override;
+  s.correct = c.correct;
+  s.seed = c.sensor_seed;
+  return s;
+}
+
+}  // namespace drom::app

@@ -1,0 +1,50 @@
+#pragma once
+// What drom run and drom study share: the case at the run's scale, the offline database, the light
+// model and the truth run under --out (each computed once and reused while the case that made it is
+// unchanged), and the closed loop's settings from the case.
+#include "apps/case_file.hpp"
+#include "apps/commands.hpp"
+#include "levelset/part_shape.hpp"
+#include "online/closed_loop.hpp"
+#include "reduce/light_model.hpp"
+
+#include <filesystem>
+#include <memory>
+
+namespace drom::app {
+
+// The case as drom run runs it: with [run] scale = "quick", run.quick's overrides first, then the
+// user's (so --set wins).
+Case load_run_case(const CommandOptions& options);
+
+// The truth run, as the closed loop plays it.
+struct TruthRun {
+  Eigen::MatrixXd target_history;        // target nodes x stations (mm)
+  Eigen::VectorXd station_times;
+  Eigen::Matrix3Xd final_displacement;   // at the model's final-shape nodes
+  double amplitude = 1;                  // the case's truth.amplitude it was computed with
+};
+
+// One loop's own copy of the truth (a SurfaceHistory caches, so loops in parallel each need one).
+struct TruthPlay {
+  std::unique_ptr<online::SurfaceHistory> history;
+  online::TruePart part;
+};
+
+struct ClosedLoopInputs {
+  reduce::LightModel model;
+  TruthRun truth;
+  levelset::PartShape shape;
+  // The truth with its stresses multiplied by `factor` (displacements are linear in them).
+  TruthPlay play(double factor = 1) const;
+  double offline_seconds = 0, truth_seconds = 0, reduce_seconds = 0;  // this invocation's
+  bool reused_offline = false, reused_truth = false;
+};
+
+// Runs (or reuses) out/offline, out/model and out/truth for the case. Progress on stderr unless quiet.
+ClosedLoopInputs prepare_closed_loop(const Case& c, const CommandOptions& options);
+
+online::PredictorSettings predictor_settings(const Case& c);
+online::ClosedLoopSettings loop_settings(const Case& c);
+
+}  // namespace drom::app

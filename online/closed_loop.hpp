@@ -1,0 +1,111 @@
+#pragma once
+// The closed loop of design.md §6-§7, simulated: a machine runs the program with the tool-length
+// offset the predictor commands, a laser sheet on its spindle reads the floor it has cut as the part
+// distorts, the predictor learns from the readings, and the part is the truth run's.
+//
+// Clocks. The machine runs in clock time at feed_override x the programmed feed, so it is at program
+// time t_true = feed_override * clock. The predictor only knows the controller's waypoint edges, late
+// by `desync`, and dead-reckons the program time t_believed in between: the sensor's points are placed,
+// and offsets are computed, for the believed time.
+//
+// Each step (the smaller of the sensor period and the offset refresh interval):
+//   1. the tool, where it truly is, cuts at its commanded altitude (programmed z + applied offset);
+//      the altitude error of the tool-workpiece contact point is that altitude minus where the target
+//      surface truly is then (nominal + w_true);
+//   2. on the refresh instants, the offset for the middle of the coming hold interval is commanded;
+//   3. on the sensor instants, a profile is read from the true surfaces and handed to the predictor.
+// At the end of every pass the predictor's final shape is compared with the truth's.
+#include "online/laser_sheet.hpp"
+#include "online/machined_floor.hpp"
+#include "online/predictor.hpp"
+#include "online/surface_history.hpp"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <vector>
+
+namespace drom::online {
+
+// The real part, as the simulation needs it.
+struct TruePart {
+  const SurfaceHistory* target = nullptr;  // w of the target surface over program time (mm)
+  Eigen::Matrix3Xd final_displacement;     // after unclamping, at the model's final-shape nodes (mm)
+  // Nominal altitude of the stock's top at (x, y); nothing off the part.
+  std::function<std::optional<double>(double, double)> stock_top;
+};
+
+struct ClosedLoopSettings {
+  LaserSheet sheet;
+  SensorErrors errors;
+  double period = 0.1;         // s between profiles
+  double refresh_rate = 10;    // Hz: offset setpoints
+  double desync = 0;           // s: how late the controller's edges reach the predictor
+  double feed_override = 1;    // the machine's feed over the programmed one
+  std::vector<int> sync;       // waypoints raising an edge; empty: every waypoint
+  bool correct = true;         // false: the offsets stay 0 (the predictor still learns)
+  std::uint32_t seed = 2015;   // the sensor noise's
+};
+
+// A pass: a stretch of program time with the tool on the floor (on the target surface, at depth).
+struct Pass {
+  double start = 0, end = 0;
+};
+std::vector<Pass> floor_passes(const reduce::LightModel& model);
+
+struct LoopSample {                    // one step with the tool on the floor
+  double clock = 0, program_time = 0;  // true program time
+  double x = 0, y = 0;
+  double offset = 0;                   // applied (mm)
+  double distortion = 0;               // w_true under the tool (mm)
+  double error = 0;                    // commanded contact altitude - true target altitude (mm)
+  int pass = 0;                        // 1-based
+  bool learned = false;
+};
+
+struct PassFigures {
+  int pass = 0;
+  double start = 0, end = 0;  // program time
+  int samples = 0;
+  double mean_abs_error = 0, max_abs_error = 0;        // path altitude error (mm)
+  double max_abs_distortion = 0;                       // w_true under the tool (what no correction leaves)
+  // The final-shape prediction at the pass's end against the truth, on the vertical displacement of
+  // the final part's surface nodes: max and RMS error, and the fraction inside the 95 % band.
+  double shape_max_error = 0, shape_rms_error = 0, shape_band_coverage = 0;
+  bool learned = false;  // the predictor was learned by the pass's end
+  long long profiles = 0, points_used = 0;
+};
+
+struct OffsetCommand {
+  double clock = 0, believed_time = 0, true_time = 0, offset = 0;
+};
+
+struct ClosedLoopResult {
+  std::vector<LoopSample> samples;
+  std::vector<PassFigures> passes;
+  std::vector<FinalShape> shapes;  // the prediction at each pass's end
+  std::vector<OffsetCommand> offsets;
+  double learned_at = -1;          // program time (true) at which the predictor declared itself learned
+  long long profiles = 0;
+  ProfileReport points;            // totals over all profiles
+  Estimate estimate;               // at the end
+  double seconds = 0;
+};
+
+class ClosedLoop {
+ public:
+  ClosedLoop(const reduce::LightModel& model, PredictorSettings predictor, ClosedLoopSettings settings);
+  ClosedLoopResult run(const TruePart& truth, const std::function<void(double fraction)>& progress = {}) const;
+
+  const std::vector<Pass>& passes() const { return passes_; }
+
+ private:
+  const reduce::LightModel& model_;
+  PredictorSettings predictor_settings_;
+  ClosedLoopSettings settings_;
+  std::vector<Pass> passes_;
+};
+
+}  // namespace drom::online
