@@ -22,10 +22,14 @@ struct CommandOptions {
   double history_tolerance = -1;    // mm, all space-time compressions together; -1: tolerance / 2
   double profile_scale = -1;        // MPa per unit profile; -1: the case's largest coefficient
   int max_rank = -1;
+  // drom study
+  std::string study_parameter;
+  std::vector<double> study_values;
 };
 
 int run_command(const CommandOptions& options);    // drom run
 int layer_command(const CommandOptions& options);  // drom layer
+int study_command(const CommandOptions& options);  // drom study
 int mesh_command(const CommandOptions& options);   // drom mesh
 int check_command(const CommandOptions& options);  // drom check
 int removal_command(const CommandOptions& options);  // drom removal

@@ -75,6 +75,8 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
     result.passes[p].end = passes_[p].end;
   }
   std::size_t next_edge = 0, next_shape = 0;
+  const bool calibrating = settings_.errors.offset_error.head<2>().norm() > 0 || settings_.errors.angle_error_deg != 0;
+  double sum_be = 0, sum_ee = 0, sum_bb = 0;
   double applied = 0;
   const long steps = static_cast<long>(std::ceil(program_end / settings_.feed_override / step)) + 1;
   for (long k = 0; k <= steps; ++k) {
@@ -104,7 +106,7 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
         LoopSample s;
         s.clock = clock, s.program_time = t_true, s.x = tip.x(), s.y = tip.y();
         s.offset = applied, s.distortion = w;
-        s.error = tip.z() + applied - (target.nominal_altitude(*p) + required);
+        s.error = applied - required;  // against the ideal path: the program moved with the true target surface
         s.pass = pass;
         s.learned = result.learned_at >= 0;
         result.samples.push_back(s);
@@ -141,6 +143,24 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
       };
       const Eigen::Vector3d believed = reckoning.position_at_program_time(t_believed);
       const auto points = scan(settings_.sheet, settings_.errors, believed, tip, read, rng);
+      if (calibrating && result.profiles % 10 == 0) {
+        LaserSheet actual = settings_.sheet;
+        actual.offset += settings_.errors.offset_error;
+        actual.angle_deg += settings_.errors.angle_error_deg;
+        const auto where = actual.footprint(tip), thought = settings_.sheet.footprint(believed);
+        for (std::size_t i = 0; i < where.size(); ++i) {
+          const Eigen::Vector2d d = where[i] - thought[i];
+          if (d.norm() < 1e-9) continue;
+          const Eigen::Vector2d u = d.normalized() * 0.5;
+          const auto a = read(where[i].x(), where[i].y()), b = read(thought[i].x(), thought[i].y());
+          const auto b_plus = read(thought[i].x() + u.x(), thought[i].y() + u.y()), b_minus = read(thought[i].x() - u.x(), thought[i].y() - u.y());
+          // Only on the floor (the stock's top and the walls are not what the predictor fits).
+          if (!a || !b || !b_plus || !b_minus || std::abs(*a - *b) > 0.5 || std::abs(*b_plus - *b_minus) > 0.5) continue;
+          const double bias = *a - *b, expected = (*b_plus - *b_minus) / 1.0 * d.norm();
+          sum_be += bias * expected, sum_ee += expected * expected, sum_bb += bias * bias;
+          ++result.calibration.points;
+        }
+      }
       ToolPose pose;
       pose.tip = believed;
       pose.applied_offset = applied;
@@ -169,7 +189,13 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
       result.shapes.push_back(std::move(shape));
       ++next_shape;
     }
-    if (progress && k % 1000 == 0) progress(static_cast<double>(k) / static_cast<double>(steps));
+    if (progress && k % std::max(1L, steps / 100) == 0) progress(static_cast<double>(k) / static_cast<double>(steps));
+  }
+  if (result.calibration.points > 0) {
+    const auto n = static_cast<double>(result.calibration.points);
+    result.calibration.rms_bias = std::sqrt(sum_bb / n);
+    result.calibration.rms_slope_times_offset = std::sqrt(sum_ee / n);
+    result.calibration.ratio = sum_ee > 0 ? sum_be / sum_ee : 0;
   }
   result.estimate = predictor.estimate();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -10,8 +10,8 @@
 //
 // Each step (the smaller of the sensor period and the offset refresh interval):
 //   1. the tool, where it truly is, cuts at its commanded altitude (programmed z + applied offset);
-//      the altitude error of the tool-workpiece contact point is that altitude minus where the target
-//      surface truly is then (nominal + w_true);
+//      the altitude error of the tool-workpiece contact point against the ideal path (the program
+//      moved with the true target surface) is the applied offset minus the one the truth needed;
 //   2. on the refresh instants, the offset for the middle of the coming hold interval is commanded;
 //   3. on the sensor instants, a profile is read from the true surfaces and handed to the predictor.
 // At the end of every pass the predictor's final shape is compared with the truth's.
@@ -60,7 +60,7 @@ struct LoopSample {                    // one step with the tool on the floor
   double x = 0, y = 0;
   double offset = 0;                   // applied (mm)
   double distortion = 0;               // w_true under the tool (mm)
-  double error = 0;                    // commanded contact altitude - true target altitude (mm)
+  double error = 0;                    // offset applied - offset the true target needed: the contact point against the ideal path (mm)
   int pass = 0;                        // 1-based
   bool learned = false;
 };
@@ -82,6 +82,15 @@ struct OffsetCommand {
   double clock = 0, believed_time = 0, true_time = 0, offset = 0;
 };
 
+// What a calibration error does to the measured surface (seed §2.3.2): at every tenth profile's
+// points on the floor, the reading's bias (the floor where the sheet truly is minus the floor where
+// it is believed to be, noise-free) against the local slope times the sheet's displacement.
+struct CalibrationBias {
+  long long points = 0;
+  double rms_bias = 0, rms_slope_times_offset = 0;  // mm
+  double ratio = 0;  // least-squares slope of bias on slope x offset (1: the seed's rule holds)
+};
+
 struct ClosedLoopResult {
   std::vector<LoopSample> samples;
   std::vector<PassFigures> passes;
@@ -91,6 +100,7 @@ struct ClosedLoopResult {
   long long profiles = 0;
   ProfileReport points;            // totals over all profiles
   Estimate estimate;               // at the end
+  CalibrationBias calibration;     // empty without calibration errors
   double seconds = 0;
 };
 

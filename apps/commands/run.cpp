@@ -41,6 +41,8 @@ nlohmann::json loop_json(const online::ClosedLoopResult& r) {
           {"points", {{"used", r.points.used}, {"outside_target", r.points.outside}, {"not_yet_cut", r.points.not_yet_cut}, {"invalid", r.points.invalid},
                       {"out_of_range", r.points.out_of_range}}},
           {"learned_at_program_time_s", r.learned_at},
+          {"calibration_bias", {{"sampled_points", r.calibration.points}, {"rms_bias_mm", r.calibration.rms_bias},
+                                {"rms_slope_times_offset_mm", r.calibration.rms_slope_times_offset}, {"ratio_bias_to_slope_times_offset", r.calibration.ratio}}},
           {"alpha", std::vector<double>(r.estimate.alpha.data(), r.estimate.alpha.data() + r.estimate.alpha.size())},
           {"seconds", r.seconds}};
 }
@@ -108,6 +110,9 @@ int run_command(const CommandOptions& options) {
     std::printf("  %-52s %.2e mm\n", "path error with correction, mean from pass 3", h.corrected_mean_from_3);
     std::printf("  %-52s %.4f mm (target %.3g)\n", "final-shape max error, end of pass 3", h.shape_error_pass3, c.shape_tolerance);
     std::printf("  %-52s %.4f mm (95 %% band covers %.1f %%)\n", "final-shape max error, end", h.shape_error_end, 100 * h.band_coverage_end);
+    if (corrected.calibration.points > 0)
+      std::printf("  %-52s %.2e mm (slope x offset %.2e mm, ratio %.2f)\n", "calibration error's bias on the measured floor, RMS", corrected.calibration.rms_bias,
+                  corrected.calibration.rms_slope_times_offset, corrected.calibration.ratio);
     std::printf("  outputs in %s: passes.csv/.png, final_shape_error.png, final_shape.pvd, offsets.csv, corrected_program.nc, summary.json (%.0f s)\n",
                 options.out.string().c_str(), seconds_since(start));
   }
