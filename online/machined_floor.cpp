@@ -29,18 +29,22 @@ std::optional<double> MachinedFloor::surface(double x, double y, const reduce::S
   double lowest = std::numeric_limits<double>::infinity();
   const Eigen::VectorXd& stations = w.times();
   for (const auto& [entry, exit] : scratch_) {
-    // The cover's ends, and every offset change and station inside it.
-    instants_.assign({entry, exit});
-    for (auto it = std::upper_bound(offsets_.begin(), offsets_.end(), entry, [](double v, const auto& e) { return v < e.first; });
-         it != offsets_.end() && it->first < exit; ++it)
-      instants_.push_back(it->first);
+    // w is linear between stations: the cover's pieces between them, each with w at its two ends.
+    instants_.assign({entry});
     for (const double* s = std::upper_bound(stations.data(), stations.data() + stations.size(), entry); s != stations.data() + stations.size() && *s < exit; ++s)
       instants_.push_back(*s);
-    std::sort(instants_.begin(), instants_.end());
-    // On each piece the offset is constant and w linear: its ends bound it.
+    instants_.push_back(exit);
     for (std::size_t i = 0; i + 1 < instants_.size(); ++i) {
-      const double o = offset_at(instants_[i]);
-      lowest = std::min({lowest, o - w.at_instant(point, instants_[i]), o - w.at_instant(point, instants_[i + 1])});
+      const double a = instants_[i], b = instants_[i + 1], wa = w.at_instant(point, a), wb = w.at_instant(point, b);
+      auto w_at = [&](double tau) { return b > a ? wa + (wb - wa) * (tau - a) / (b - a) : wa; };
+      // Each stretch of constant offset inside [a, b] is bounded by its ends.
+      double from = a, o = offset_at(a);
+      for (auto it = std::upper_bound(offsets_.begin(), offsets_.end(), a, [](double v, const auto& e) { return v < e.first; });
+           it != offsets_.end() && it->first < b; ++it) {
+        lowest = std::min({lowest, o - w_at(from), o - w_at(it->first)});
+        from = it->first, o = it->second;
+      }
+      lowest = std::min({lowest, o - w_at(from), o - w_at(b)});
     }
   }
   return s0 + lowest + w.at_instant(point, t);

@@ -178,33 +178,47 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
       // in the material's frame, offset(tau) - w(x, tau). Over a cover the offset is a step function
       // and the fit linear between the model's instants, so the candidates are the cover's ends, the
       // offset changes (both sides) and the instants inside it.
-      double cut_offset = 0;
-      double t_cut = covers_.front().first, lowest = std::numeric_limits<double>::infinity();
+      double cut_offset = 0, t_cut = covers_.front().first, lowest = std::numeric_limits<double>::infinity();
+      auto consider = [&](double o, double w_fit, double tau) {
+        if (o - w_fit < lowest - 1e-12) lowest = o - w_fit, t_cut = tau, cut_offset = o;
+      };
       for (const auto& [entry, exit] : covers_) {
-        candidates_.assign({entry, exit});
-        for (auto it = std::upper_bound(offsets_.begin(), offsets_.end(), entry, [](double v, const auto& e) { return v < e.first; });
-             it != offsets_.end() && it->first < exit; ++it)
-          candidates_.push_back(it->first);
+        candidates_.assign({entry});
         for (const double* c = std::upper_bound(instants.data(), instants.data() + instants.size(), entry); c != instants.data() + instants.size() && *c < exit; ++c)
           candidates_.push_back(*c);
-        for (const double tau : candidates_) {
-          basis_at(*p, tau, u_.data());
-          const double w_fit = u_.dot(alpha);
-          for (const double o : {applied_offset_at(tau), applied_offset_at(std::nextafter(tau, -1e300))}) {
-            const double bottom = o - w_fit;
-            if (bottom < lowest - 1e-12) lowest = bottom, t_cut = tau, cut_offset = o;
+        candidates_.push_back(exit);
+        for (std::size_t i = 0; i + 1 < candidates_.size(); ++i) {
+          // The fit is linear between the model's instants: its value at a piece's ends, then scalars.
+          const double a = candidates_[i], b = candidates_[i + 1];
+          basis_at(*p, a, u_.data());
+          const double wa = u_.dot(alpha);
+          basis_at(*p, b, u_.data());
+          const double wb = u_.dot(alpha);
+          auto w_at = [&](double tau) { return b > a ? wa + (wb - wa) * (tau - a) / (b - a) : wa; };
+          double from = a, o = applied_offset_at(a);
+          for (auto it = std::upper_bound(offsets_.begin(), offsets_.end(), a, [](double v, const auto& e) { return v < e.first; });
+               it != offsets_.end() && it->first < b; ++it) {
+            consider(o, w_at(from), from);
+            consider(o, w_at(it->first), it->first);
+            from = it->first, o = it->second;
           }
+          consider(o, w_at(from), from);
+          consider(o, w_at(b), b);
         }
       }
       const double m = pt.z - (s0 + cut_offset);
-      if (std::abs(m) > settings_.reading_range) {
-        ++report.out_of_range;
-        continue;
-      }
       auto g = G_.row(used);
       basis_at(*p, t, g.data());
       basis_at(*p, t_cut, u_.data());
       g -= u_.transpose();
+      // Not the machined floor (a wall, the stock's top, a glitch) if far from what the fit expects
+      // there. Against the fit, not against the commanded altitude: late in a run the floor has moved
+      // by more than the range since it was cut, and a cut at the range would keep only the readings
+      // whose noise pulls them inside it, a bias.
+      if (std::abs(m - g.dot(alpha)) > settings_.reading_range) {
+        ++report.out_of_range;
+        continue;
+      }
       m_[used] = m;
       const double e = m - g.dot(snap->alpha);
       square_error += e * e;

@@ -41,7 +41,7 @@ struct ToolPose {
 struct PredictorSettings {
   double noise_sd = 0.05;           // mm: the sensor's noise (sigma of the measurement model)
   double prior_scale = 1;           // multiplies the model's prior standard deviations
-  double reading_range = 1.0;       // mm: |z - z_cmd| beyond this is not the machined surface (a wall, the stock's top, a glitch)
+  double reading_range = 1.0;       // mm: a reading this far from the fit's prediction is not the machined surface (a wall, the stock's top, a glitch)
   double learning_tolerance = 0.01; // mm: learned once the fit predicts recent points this well (net of noise)
   int learning_window = 5;          // profiles the learning criterion looks back on
   double max_offset_rate = 1.0;     // mm/s of program time: rate limit of the commanded offset
