@@ -140,9 +140,9 @@ TruthPlay ClosedLoopInputs::play(double factor) const {
   return p;
 }
 
-online::PredictorSettings predictor_settings(const Case& c) {
+online::PredictorSettings predictor_settings(const Case& c, const reduce::LightModel& model) {
   online::PredictorSettings s;
-  s.noise_sd = std::max(c.sensor_noise, 1e-4);  // a noise-free sensor still has the model's own error
+  s.noise_sd = std::max(std::hypot(c.sensor_noise, model.error_bound()), 1e-6);
   s.prior_scale = c.prior_scale;
   s.reading_range = c.reading_range;
   s.learning_tolerance = c.learning_tolerance;

@@ -44,7 +44,9 @@ struct ClosedLoopInputs {
 // Runs (or reuses) out/offline, out/model and out/truth for the case. Progress on stderr unless quiet.
 ClosedLoopInputs prepare_closed_loop(const Case& c, const CommandOptions& options);
 
-online::PredictorSettings predictor_settings(const Case& c);
+// The measurement sigma is the sensor's noise and the model's own error bound together: a noise-free
+// sensor still sees what the model cannot represent, and the band should say so.
+online::PredictorSettings predictor_settings(const Case& c, const reduce::LightModel& model);
 online::ClosedLoopSettings loop_settings(const Case& c);
 
 }  // namespace drom::app

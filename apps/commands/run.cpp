@@ -59,7 +59,7 @@ int run_command(const CommandOptions& options) {
   online::ClosedLoopSettings with = loop_settings(c), without = with;
   with.correct = true;
   without.correct = false;
-  const online::ClosedLoop corrected_loop(in.model, predictor_settings(c), with), uncorrected_loop(in.model, predictor_settings(c), without);
+  const online::ClosedLoop corrected_loop(in.model, predictor_settings(c, in.model), with), uncorrected_loop(in.model, predictor_settings(c, in.model), without);
   const TruthPlay truth_a = in.play(), truth_b = in.play();
   if (!options.quiet) std::cerr << "drom run: the closed loop, with and without correction (" << corrected_loop.passes().size() << " passes)\n";
   online::ClosedLoopResult corrected, uncorrected;

@@ -70,7 +70,7 @@ int study_command(const CommandOptions& options) {
     online::ClosedLoopSettings with = loop_settings(c), without = with;
     with.correct = true;
     without.correct = false;
-    const online::ClosedLoop corrected_loop(in.model, predictor_settings(c), with), uncorrected_loop(in.model, predictor_settings(c), without);
+    const online::ClosedLoop corrected_loop(in.model, predictor_settings(c, in.model), with), uncorrected_loop(in.model, predictor_settings(c, in.model), without);
     const TruthPlay a = in.play(factor), b = in.play(factor);
     online::ClosedLoopResult corrected, uncorrected;
     std::thread side([&] { uncorrected = uncorrected_loop.run(b.part); });
