@@ -77,12 +77,8 @@ ClosedLoopInputs prepare_closed_loop(const Case& c, const CommandOptions& option
   // 2. The light model, at the case's control.model_tolerance.
   if (!options.quiet) std::cerr << "drom run: 2/3 light model (" << (options.out / "model").string() << ")\n";
   const auto model_file = options.out / "model" / "model.h5";
-  bool reduce_needed = true;
-  if (std::filesystem::exists(model_file)) {
-    const reduce::LightModel existing = reduce::LightModel::read(model_file);
-    reduce_needed = existing.database_hash != Hdf5Reader(options.out / "offline" / "database.h5").text_attribute("content_hash") ||
-                    existing.tolerance != c.model_tolerance;
-  }
+  // Always reduced again (seconds): the model depends on the database and on how it is reduced.
+  const bool reduce_needed = true;
   if (reduce_needed) {
     CommandOptions stage;
     stage.case_path = options.out / "offline" / "database.h5";

@@ -26,7 +26,13 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
   if (!(settings_.noise_sd > 0) || !(settings_.prior_scale > 0) || !(settings_.path_sample > 0) || settings_.learning_window < 1)
     throw std::invalid_argument("predictor settings: noise_sd, prior_scale and path_sample must be > 0, learning_window >= 1");
   const int n = model_.target.node_count();
-  prior_precision_ = (settings_.prior_scale * model_.prior_sd).array().square().inverse();
+  if (model_.prior_covariance.size() > 0) {
+    const Eigen::LLT<Eigen::MatrixXd> llt(settings_.prior_scale * settings_.prior_scale * model_.prior_covariance);
+    if (llt.info() != Eigen::Success) throw std::invalid_argument("predictor: the model's prior covariance is not positive definite");
+    prior_precision_ = llt.solve(Eigen::MatrixXd::Identity(r_, r_));
+  } else {
+    prior_precision_ = (settings_.prior_scale * model_.prior_sd).array().square().inverse().matrix().asDiagonal();
+  }
   // The same rule as the model's per-node cut times (drom reduce): the tip down within 2 % of the
   // depth of the point's nominal altitude.
   cut_index_ = reduce::CutTimeIndex(model_.path, model_.tool_radius, 0.02 * model_.pocket_depth,
@@ -230,7 +236,7 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
     const auto G = G_.topRows(used);
     Eigen::MatrixXd precision = normal_;
     precision.selfadjointView<Eigen::Lower>().rankUpdate(G.transpose(), w);
-    precision.diagonal() += prior_precision_;
+    precision += prior_precision_;
     return Eigen::VectorXd(precision.selfadjointView<Eigen::Lower>().llt().solve(rhs_ + w * (G.transpose() * m_.head(used))));
   };
   Eigen::VectorXd pick = snap->alpha;
@@ -271,7 +277,7 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
     learned_ = net <= settings_.learning_tolerance;
   }
   Eigen::MatrixXd precision = normal_;
-  precision.diagonal() += prior_precision_;
+  precision += prior_precision_;
   snapshot_.store(std::make_shared<const Snapshot>(Snapshot{precision.llt().solve(rhs_), learned_}), std::memory_order_release);
   return report;
 }
@@ -279,7 +285,7 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
 Estimate Predictor::estimate() const {
   std::lock_guard<std::mutex> lock(ingest_);
   Eigen::MatrixXd precision = normal_;
-  precision.diagonal() += prior_precision_;
+  precision += prior_precision_;
   const Eigen::LLT<Eigen::MatrixXd> llt(precision);
   Estimate e;
   e.alpha = llt.solve(rhs_);

@@ -6,7 +6,7 @@
 //   z = z_cmd + w(x, y, t) - w(x, y, t_cut) + noise,   w = sum_k alpha_k U1_k,
 // so m = z - z_cmd is linear in alpha through the differenced basis U1_k(x, y, t) - U1_k(x, y, t_cut).
 // The fit is Bayesian least squares: normal equations accumulated profile by profile (cost
-// independent of what came before), a Gaussian prior alpha ~ N(0, diag(prior_sd^2)) from the model
+// independent of what came before), a Gaussian prior on alpha from the model (its prior covariance, or diag(prior_sd^2))
 // (a profile with independent coefficients of standard deviation profile_scale), and the posterior
 // covariance (H / sigma^2 + prior^-1)^-1, which gives every prediction its standard deviation.
 //
@@ -123,7 +123,7 @@ class Predictor {
   reduce::LightModel model_;
   PredictorSettings settings_;
   int r_ = 0;
-  Eigen::VectorXd prior_precision_;
+  Eigen::MatrixXd prior_precision_;
   // Path samples for the offsets: program time, and per sample U1_k and its x / y derivatives at the
   // tool's position, plus the nominal surface's slope there (ball end mills).
   Eigen::VectorXd sample_time_;

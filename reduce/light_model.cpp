@@ -70,6 +70,7 @@ void LightModel::write(const std::filesystem::path& file) const {
   put(h5, "singular_values", singular_values);
   put(h5, "right", right);
   put(h5, "prior_sd", prior_sd);
+  if (prior_covariance.size() > 0) put(h5, "prior_covariance", prior_covariance);
   if (!histories.empty()) put(h5, "history_times", histories.front().times());
   for (int k = 0; k < rank(); ++k) {
     put_single(h5, "history_" + std::to_string(k) + "_space", histories[static_cast<std::size_t>(k)].space());
@@ -120,6 +121,11 @@ LightModel LightModel::read(const std::filesystem::path& file) {
   m.singular_values = get(h5, "singular_values");
   m.right = get(h5, "right");
   m.prior_sd = get(h5, "prior_sd");
+  if (h5.has("prior_covariance")) {
+    m.prior_covariance = get(h5, "prior_covariance");
+    if (m.prior_covariance.rows() != r || m.prior_covariance.cols() != r || !m.prior_covariance.allFinite())
+      throw fail("prior_covariance: a finite rank x rank matrix expected");
+  }
   if (m.right.cols() != r || m.prior_sd.size() != r || m.singular_values.size() < r) throw fail("rank " + std::to_string(r) + " disagrees with right / prior_sd / singular_values");
   const Eigen::VectorXd times = r > 0 ? Eigen::VectorXd(get(h5, "history_times")) : Eigen::VectorXd();
   for (int k = 0; k < r; ++k) {

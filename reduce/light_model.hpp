@@ -37,7 +37,8 @@ struct LightModel {
   std::vector<int> shape_faces;
   int shape_face_nodes = 4;
   Eigen::MatrixXd final_basis;                // U2: (3 * shape nodes) x r, rows (node, component)
-  Eigen::VectorXd prior_sd;                   // alpha ~ N(0, diag(prior_sd^2))
+  Eigen::VectorXd prior_sd;                   // alpha ~ N(0, diag(prior_sd^2)), or
+  Eigen::MatrixXd prior_covariance;           // r x r when the coefficients' plausible amplitudes differ (prior_sd its diagonal's root)
   ToolShape tool_shape = ToolShape::Flat;
   double tool_radius = 0;
   Eigen::MatrixXd path;                       // waypoints x 4: tool tip x, y, z and program time

@@ -25,6 +25,14 @@ ReductionReport reduce_snapshots(const SnapshotDatabase& db, const ReductionSett
   model.pod_max_bound = pod.max_bound;
   model.pod_euclidean_bound = pod.euclidean_bound;
   model.prior_sd = pod.singular_values.head(r);
+  model.prior_covariance.resize(0, 0);
+  if (settings.profile_sd.size() > 0) {
+    if (settings.profile_sd.size() != P || !(settings.profile_sd.array() > 0).all())
+      throw std::invalid_argument("profile_sd: one positive value per database column expected");
+    const Eigen::MatrixXd L = pod.singular_values.head(r).asDiagonal() * pod.right.leftCols(r).transpose() * (settings.profile_sd / settings.profile_scale).asDiagonal();
+    model.prior_covariance = L * L.transpose();
+    model.prior_sd = model.prior_covariance.diagonal().cwiseSqrt();
+  }
 
   // 3. Space-time form of each history, compressed in mm (sigma_k U1_k), stored per unit U1_k.
   ReductionReport report;

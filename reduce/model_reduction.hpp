@@ -6,8 +6,10 @@
 //   3. each basis history U1_k, reshaped target nodes x stations, kept as sum_l a_l(x) b_l(t) with
 //      tolerance history_tolerance / r on sigma_k U1_k (so all histories together cost at most
 //      history_tolerance in mm);
-//   4. U2 = B2 V_r D_r^-1 for the final shape, and the prior alpha ~ N(0, D_r^2) (a profile whose
-//      coefficients are independent with standard deviation profile_scale).
+//   4. U2 = B2 V_r D_r^-1 for the final shape, and the prior on alpha: the profile's coefficients c
+//      independent with standard deviations profile_sd (MPa), so alpha = D_r V_r^T c / profile_scale
+//      ~ N(0, D_r V_r^T diag(profile_sd / profile_scale)^2 V_r D_r); with every sd at profile_scale
+//      that is N(0, D_r^2).
 #include "reduce/light_model.hpp"
 
 #include <Eigen/Core>
@@ -26,6 +28,9 @@ struct ReductionSettings {
   double history_tolerance = 5e-4;  // mm
   double profile_scale = 50;        // MPa
   int max_rank = -1;                // -1: as many as the tolerance needs
+  // Plausible amplitude of each database column's coefficient (MPa), for the prior; empty:
+  // profile_scale for every one.
+  Eigen::VectorXd profile_sd;
 };
 
 struct ReductionReport {

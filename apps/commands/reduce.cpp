@@ -175,6 +175,14 @@ int reduce_command(const CommandOptions& options) {
   for (double v : c.sigma22) largest = std::max(largest, std::abs(v));
   settings.profile_scale = options.profile_scale > 0 ? options.profile_scale : (largest > 0 ? largest : 50.0);
   settings.max_rank = options.max_rank;
+  // The prior: each unit profile's coefficient at the case's own magnitude for that direction and
+  // degree (a rolled plate's stresses fall with the degree), floored at a tenth of the largest.
+  if (options.profile_scale <= 0 && !c.sigma11.empty() && static_cast<Eigen::Index>(c.sigma11.size() + c.sigma22.size()) == db.B1.cols()) {
+    settings.profile_sd.resize(db.B1.cols());
+    Eigen::Index j = 0;
+    for (double v : c.sigma11) settings.profile_sd[j++] = std::max(std::abs(v), 0.1 * settings.profile_scale);
+    for (double v : c.sigma22) settings.profile_sd[j++] = std::max(std::abs(v), 0.1 * settings.profile_scale);
+  }
   const auto report = reduce::reduce_snapshots(db, settings, model);
   model.case_toml = h5.text_attribute("case");
   model.database_hash = h5.text_attribute("content_hash");
@@ -233,6 +241,8 @@ int reduce_command(const CommandOptions& options) {
                           {"database_hash", model.database_hash},
                           {"model", model_path.filename().string()},
                           {"rank", model.rank()},
+                          {"prior", model.prior_covariance.size() > 0 ? "each unit profile at the case's own coefficient magnitude (full covariance)"
+                                                                      : "every unit profile at profile_scale (diagonal)"},
                           {"profiles", db.B1.cols()},
                           {"profile_scale_mpa", settings.profile_scale},
                           {"tolerance_mm", settings.tolerance},
