@@ -176,7 +176,7 @@ TEST_F(ModelOnARealDatabase, TruthOutsideTheBasisIsPredictedWithinItsTruncationE
   // differenced readings as they come, must predict the final target surface within twice that plus
   // the model's own bound.
   const auto db = offline(" --set stress.max_degree=2 --set stress.sigma11=[-60] --set stress.sigma22=[-40]");
-  ASSERT_EQ(run("truth" + kPlate + " --frames 0 --out " + (dir_ / "truth").string()), "");
+  ASSERT_EQ(run("truth" + kPlate + " --set truth.max_degree=6 --set truth.sigma11=[-60,30,-15] --set truth.sigma22=[-40,20,-10] --frames 0 --out " + (dir_ / "truth").string()), "");
   const auto out = dir_ / "model_outside";
   ASSERT_EQ(run("reduce " + db.string() + " --tol 1e-4 --out " + (out / "model.h5").string()), "");
   auto model = drom::reduce::LightModel::read(out / "model.h5");
