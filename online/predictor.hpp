@@ -138,7 +138,7 @@ class Predictor {
   // add_profile's scratch (under ingest_). U1 at a node and a stored instant j, all r modes, kept in
   // a small per-node cache (slot j mod kSlots): a profile touches a few instants per node (its own
   // time interval, and the cut times of the two or three passes under the sheet).
-  static constexpr int kSlots = 8;
+  static constexpr int kSlots = 32;
   const double* node_at_instant(int node, Eigen::Index j);
   void basis_at(const reduce::SurfacePoint& p, double t, double* out);  // U1_k(x, t), k = 1..r
   std::vector<std::pair<double, double>> covers_;
