@@ -76,26 +76,37 @@ void read_mesh(CaseReader& r, Case& c) {
   }
 }
 
+int profile_count(const std::string& parity, int max_degree) {
+  int count = 0;
+  for (int j = 2; j <= max_degree; ++j)
+    if (parity == "all" || (parity == "even") == (j % 2 == 0)) ++count;
+  return count;
+}
+
+// `section`.sigma11 and .sigma22: one coefficient (MPa) per degree of the parity's basis.
+void read_coefficients(CaseReader& r, const std::string& section, const std::string& parity, int max_degree, std::vector<double>& sigma11,
+                       std::vector<double>& sigma22) {
+  const int count = profile_count(parity, max_degree);
+  const Range mpa = Range::closed(-2000, 2000);
+  sigma11 = r.reals(section + ".sigma11", mpa);
+  sigma22 = r.reals(section + ".sigma22", mpa);
+  for (const auto* v : {&sigma11, &sigma22}) {
+    const std::string key = section + (v == &sigma11 ? ".sigma11" : ".sigma22");
+    if (static_cast<int>(v->size()) != count)
+      r.fail(key, "has " + std::to_string(v->size()) + " coefficients; the " + parity + " basis up to degree " + std::to_string(max_degree) + " has " +
+                      std::to_string(count));
+  }
+}
+
 void read_stress(CaseReader& r, Case& c) {
   c.parity = r.choice("stress.parity", {"even", "odd", "all"});
   c.max_degree = static_cast<int>(r.integer("stress.max_degree", c.parity == "odd" ? 3 : 2, 20));
-  int count = 0;
-  for (int j = 2; j <= c.max_degree; ++j)
-    if (c.parity == "all" || (c.parity == "even") == (j % 2 == 0)) ++count;
   if (r.has("stress.table")) {
     c.table = relative_to(r.origin(), r.text("stress.table"));
     if (r.has("stress.sigma11") || r.has("stress.sigma22")) r.fail("stress.table", "give either a table or sigma11/sigma22 coefficients, not both");
     return;
   }
-  const Range mpa = Range::closed(-2000, 2000);
-  c.sigma11 = r.reals("stress.sigma11", mpa);
-  c.sigma22 = r.reals("stress.sigma22", mpa);
-  for (const char* key : {"stress.sigma11", "stress.sigma22"}) {
-    const auto& v = std::string(key) == "stress.sigma11" ? c.sigma11 : c.sigma22;
-    if (static_cast<int>(v.size()) != count)
-      r.fail(key, "has " + std::to_string(v.size()) + " coefficients; the " + c.parity + " basis up to degree " + std::to_string(c.max_degree) +
-                      " has " + std::to_string(count));
-  }
+  read_coefficients(r, "stress", c.parity, c.max_degree, c.sigma11, c.sigma22);
 }
 
 void read_pocket(CaseReader& r, Case& c) {
@@ -169,13 +180,6 @@ std::array<double, 3> triple(CaseReader& r, const std::string& key, std::array<d
   return {v[0], v[1], v[2]};
 }
 
-int profile_count(const std::string& parity, int max_degree) {
-  int count = 0;
-  for (int j = 2; j <= max_degree; ++j)
-    if (parity == "all" || (parity == "even") == (j % 2 == 0)) ++count;
-  return count;
-}
-
 void read_truth(CaseReader& r, Case& c) {
   c.has_truth = r.has("truth.parity") || r.has("truth.max_degree") || r.has("truth.sigma11") || r.has("truth.sigma22") || r.has("truth.table");
   c.truth_amplitude = r.real("truth.amplitude", Range::closed(-100, 100), 1.0);
@@ -187,15 +191,7 @@ void read_truth(CaseReader& r, Case& c) {
     if (r.has("truth.sigma11") || r.has("truth.sigma22")) r.fail("truth.table", "give either a table or sigma11/sigma22 coefficients, not both");
     return;
   }
-  const int count = profile_count(c.truth_parity, c.truth_max_degree);
-  c.truth_sigma11 = r.reals("truth.sigma11", Range::closed(-2000, 2000));
-  c.truth_sigma22 = r.reals("truth.sigma22", Range::closed(-2000, 2000));
-  for (const char* key : {"truth.sigma11", "truth.sigma22"}) {
-    const auto& v = std::string(key) == "truth.sigma11" ? c.truth_sigma11 : c.truth_sigma22;
-    if (static_cast<int>(v.size()) != count)
-      r.fail(key, "has " + std::to_string(v.size()) + " coefficients; the " + c.truth_parity + " basis up to degree " + std::to_string(c.truth_max_degree) +
-                      " has " + std::to_string(count));
-  }
+  read_coefficients(r, "truth", c.truth_parity, c.truth_max_degree, c.truth_sigma11, c.truth_sigma22);
 }
 
 void read_closed_loop(CaseReader& r, Case& c) {
