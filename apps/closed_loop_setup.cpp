@@ -3,6 +3,7 @@
 #include "apps/case_reader.hpp"
 #include "apps/case_setup.hpp"
 #include "support/atomic_file.hpp"
+#include "apps/database_matrix.hpp"
 #include "support/hdf5_reader.hpp"
 #include "support/input_error.hpp"
 #include "support/resources.hpp"
@@ -24,13 +25,6 @@ Case load_run_case(const CommandOptions& options) {
 }
 
 namespace {
-
-using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
-Eigen::MatrixXd read_matrix(const Hdf5Reader& h5, const std::string& name) {
-  const Hdf5Matrix m = h5.matrix(name);
-  return Eigen::Map<const RowMajor>(m.data.data(), static_cast<Eigen::Index>(m.rows), static_cast<Eigen::Index>(m.cols));
-}
 
 const std::vector<std::string> kLoopTables = {"sensor", "sync", "control", "run"};
 const std::vector<std::string> kPathKeys = {"part.stl", "stress.table", "truth.table", "path.gcode"};

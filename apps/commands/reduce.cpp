@@ -14,6 +14,7 @@
 #include "levelset/toolpath.hpp"
 #include "reduce/cut_time.hpp"
 #include "reduce/model_reduction.hpp"
+#include "apps/database_matrix.hpp"
 #include "support/hdf5_reader.hpp"
 #include "support/input_error.hpp"
 #include "support/png_plot.hpp"
@@ -29,13 +30,6 @@
 namespace drom::app {
 
 namespace {
-
-using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
-Eigen::MatrixXd read_matrix(const Hdf5Reader& h5, const std::string& name) {
-  const Hdf5Matrix m = h5.matrix(name);
-  return Eigen::Map<const RowMajor>(m.data.data(), static_cast<Eigen::Index>(m.rows), static_cast<Eigen::Index>(m.cols));
-}
 
 fem::Mesh read_mesh(const Hdf5Reader& h5, const std::filesystem::path& file) {
   fem::Mesh mesh;
