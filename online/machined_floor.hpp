@@ -39,7 +39,7 @@ class MachinedFloor {
  private:
   const reduce::SurfaceMesh& target_;
   reduce::CutTimeIndex covers_;
-  std::vector<std::pair<double, double>> offsets_;  // (time, offset from then on)
+  reduce::StepFunction offsets_;  // (time, offset from then on)
   mutable std::vector<std::pair<double, double>> scratch_;
   mutable std::vector<double> instants_;
 };

@@ -114,11 +114,7 @@ const double* Predictor::node_at_instant(int node, Eigen::Index j) {
   return values;
 }
 
-double Predictor::applied_offset_at(double t) const {
-  // The offset in force at t: the last one recorded at or before t (none before the first: 0).
-  auto it = std::upper_bound(offsets_.begin(), offsets_.end(), t, [](double v, const auto& e) { return v < e.first; });
-  return it == offsets_.begin() ? 0.0 : std::prev(it)->second;
-}
+double Predictor::applied_offset_at(double t) const { return reduce::step_value(offsets_, t); }
 
 void Predictor::set_offset(double t, double offset) {
   // The history stays sorted by time; an entry only where the offset in force changes.
@@ -180,38 +176,16 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
         ++report.not_yet_cut;
         continue;
       }
-      // The cut that left the floor here: of the tool's covers of the point, the lowest tool bottom
-      // in the material's frame, offset(tau) - w(x, tau). Over a cover the offset is a step function
-      // and the fit linear between the model's instants, so the candidates are the cover's ends, the
-      // offset changes (both sides) and the instants inside it.
-      double cut_offset = 0, t_cut = covers_.front().first, lowest = std::numeric_limits<double>::infinity();
-      auto consider = [&](double o, double w_fit, double tau) {
-        if (o - w_fit < lowest - 1e-12) lowest = o - w_fit, t_cut = tau, cut_offset = o;
-      };
-      for (const auto& [entry, exit] : covers_) {
-        candidates_.assign({entry});
-        for (const double* c = std::upper_bound(instants.data(), instants.data() + instants.size(), entry); c != instants.data() + instants.size() && *c < exit; ++c)
-          candidates_.push_back(*c);
-        candidates_.push_back(exit);
-        for (std::size_t i = 0; i + 1 < candidates_.size(); ++i) {
-          // The fit is linear between the model's instants: its value at a piece's ends, then scalars.
-          const double a = candidates_[i], b = candidates_[i + 1];
-          basis_at(*p, a, u_.data());
-          const double wa = u_.dot(alpha);
-          basis_at(*p, b, u_.data());
-          const double wb = u_.dot(alpha);
-          auto w_at = [&](double tau) { return b > a ? wa + (wb - wa) * (tau - a) / (b - a) : wa; };
-          double from = a, o = applied_offset_at(a);
-          for (auto it = std::upper_bound(offsets_.begin(), offsets_.end(), a, [](double v, const auto& e) { return v < e.first; });
-               it != offsets_.end() && it->first < b; ++it) {
-            consider(o, w_at(from), from);
-            consider(o, w_at(it->first), it->first);
-            from = it->first, o = it->second;
-          }
-          consider(o, w_at(from), from);
-          consider(o, w_at(b), b);
-        }
-      }
+      // The cut that left the floor here, by the current fit (the fit is linear between the model's
+      // instants, as the truth is between its stations).
+      const reduce::LowestCut cut = reduce::lowest_cut(
+          covers_, instants, offsets_,
+          [&](double tau) {
+            basis_at(*p, tau, u_.data());
+            return u_.dot(alpha);
+          },
+          candidates_, 1e-12);
+      const double cut_offset = cut.offset, t_cut = cut.time;
       const double m = pt.z - (s0 + cut_offset);
       auto g = G_.row(used);
       basis_at(*p, t, g.data());

@@ -155,7 +155,7 @@ class Predictor {
   int profiles_ = 0;
   double last_profile_time_ = 0;
   std::vector<double> recent_square_error_, recent_count_;  // per recent profile
-  std::vector<std::pair<double, double>> offsets_;          // (program time, applied offset), increasing time
+  reduce::StepFunction offsets_;                            // (program time, applied offset), increasing time
   bool learned_ = false;
   std::atomic<std::shared_ptr<const Snapshot>> snapshot_;
 

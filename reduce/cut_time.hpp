@@ -6,9 +6,60 @@
 // grid and a query looks at the few that pass nearby.
 #include <Eigen/Core>
 
+#include <algorithm>
+#include <limits>
+#include <utility>
 #include <vector>
 
 namespace drom::reduce {
+
+// A step function of time: (time, value from then on), times increasing; 0 before the first.
+using StepFunction = std::vector<std::pair<double, double>>;
+inline double step_value(const StepFunction& steps, double t) {
+  const auto it = std::upper_bound(steps.begin(), steps.end(), t, [](double v, const auto& e) { return v < e.first; });
+  return it == steps.begin() ? 0.0 : std::prev(it)->second;
+}
+
+struct LowestCut {
+  double bottom = std::numeric_limits<double>::infinity();  // offset - w at the winning instant
+  double time = 0, offset = 0;
+};
+
+// Of the tool's covers of a point (entry, exit), the cut with the lowest bottom in the material's
+// frame, offset(tau) - w(tau): the floor a flat tool leaves there. w is linear between `instants`
+// (w_at(tau) evaluates it at any instant) and the offset a step function, so the minimum lies at a
+// cover's ends, an offset change or an instant, and w between them is interpolated from its ends. A
+// candidate wins only when lower by more than `margin` (the earlier one keeps near-ties).
+template <class W>
+LowestCut lowest_cut(const std::vector<std::pair<double, double>>& covers, const Eigen::VectorXd& instants, const StepFunction& offsets, W&& w_at,
+                     std::vector<double>& pieces, double margin = 0) {
+  LowestCut best;
+  if (!covers.empty()) best.time = covers.front().first;
+  auto consider = [&](double o, double w, double tau) {
+    if (o - w < best.bottom - margin) best = {o - w, tau, o};
+  };
+  for (const auto& [entry, exit] : covers) {
+    pieces.assign({entry});
+    for (const double* c = std::upper_bound(instants.data(), instants.data() + instants.size(), entry); c != instants.data() + instants.size() && *c < exit; ++c)
+      pieces.push_back(*c);
+    pieces.push_back(exit);
+    for (std::size_t i = 0; i + 1 < pieces.size(); ++i) {
+      const double a = pieces[i], b = pieces[i + 1], wa = w_at(a), wb = w_at(b);
+      auto w_lin = [&](double tau) { return b > a ? wa + (wb - wa) * (tau - a) / (b - a) : wa; };
+      // Each stretch of constant offset inside [a, b] is bounded by its ends.
+      double from = a, o = step_value(offsets, a);
+      for (auto it = std::upper_bound(offsets.begin(), offsets.end(), a, [](double v, const auto& e) { return v < e.first; }); it != offsets.end() && it->first < b;
+           ++it) {
+        consider(o, w_lin(from), from);
+        consider(o, w_lin(it->first), it->first);
+        from = it->first, o = it->second;
+      }
+      consider(o, w_lin(from), from);
+      consider(o, w_lin(b), b);
+    }
+  }
+  return best;
+}
 
 // path: waypoints x, y, z, program time. `cutting` (optional, one flag per segment i -> i + 1): only
 // those segments count; empty: every segment (moves above the floor are excluded by the altitude test).
