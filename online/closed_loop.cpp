@@ -173,7 +173,7 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
         ++f.profiles;
         f.points_used += report.used;
       }
-      if (result.learned_at < 0 && predictor.estimate().learned) result.learned_at = t_true;
+      if (result.learned_at < 0 && predictor.learned()) result.learned_at = t_true;
     }
 
     // 4. At each pass's end: the final shape predicted now, against the truth's.

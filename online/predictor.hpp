@@ -89,6 +89,8 @@ class Predictor {
   ProfileReport add_profile(double t, const ToolPose& pose, std::span<const MeasuredPoint> points);
   void record_offset(double t, double offset);
   Estimate estimate() const;
+  // Whether the learning phase is over (from the published snapshot: no solve, no lock).
+  bool learned() const { return snapshot()->learned; }
 
   // Predicted altitude of the target surface at (x, y) and program time t (NaN off the surface), and
   // its standard deviation.
