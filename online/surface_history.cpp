@@ -52,9 +52,4 @@ double SurfaceHistory::at_instant(const reduce::SurfacePoint& p, double t) const
   return v;
 }
 
-double SurfaceHistory::at(double x, double y, double t) const {
-  const auto p = mesh_->locate(x, y, -1, false);
-  return p ? at(*p, t) : std::nan("");
-}
-
 }  // namespace drom::online

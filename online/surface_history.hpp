@@ -18,16 +18,13 @@ class SurfaceHistory {
   SurfaceHistory(const reduce::SurfaceMesh& mesh, Eigen::MatrixXd values, Eigen::VectorXd times, double start = 0);
 
   const reduce::SurfaceMesh& mesh() const { return *mesh_; }
-  // Nodal values at program time t. The last instant asked is cached: a profile's points, or the
-  // cells under the tool, all ask at one instant. Not thread safe.
+  // Nodal values at program time t. The last instant asked is cached: a profile's points, or a
+  // step's tool position, all ask at one instant. Not thread safe.
   const Eigen::VectorXd& nodal(double t) const;
   double at(const reduce::SurfacePoint& p, double t) const;  // through the cache (nodal(t))
   // The same from the face's nodes only, leaving the cache alone: for many instants at few points.
   double at_instant(const reduce::SurfacePoint& p, double t) const;
-  // NaN off the surface.
-  double at(double x, double y, double t) const;
   const Eigen::VectorXd& times() const { return times_; }  // the start, then the stations
-  void scale(double factor) { values_ *= factor; cached_t_ = std::nan(""); }
 
  private:
   const reduce::SurfaceMesh* mesh_ = nullptr;
