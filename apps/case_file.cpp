@@ -214,6 +214,7 @@ void read_closed_loop(CaseReader& r, Case& c) {
   c.learning_window = static_cast<int>(r.integer("control.learning_window", 1, 10000, c.learning_window));
   c.reading_range = r.real("control.reading_range", Range::positive(), c.reading_range);
   c.prior_scale = r.real("control.prior_scale", Range::positive(), c.prior_scale);
+  c.use_stock_top = r.boolean("control.use_stock_top", c.use_stock_top);
   c.model_tolerance = r.real("control.model_tolerance", Range::positive(), c.model_tolerance);
   c.run_scale = r.choice("run.scale", {"quick", "seed"}, "quick");
   if (r.has("run.quick")) c.run_quick = r.strings("run.quick");

@@ -102,6 +102,7 @@ struct Case {
   int learning_window = 5;
   double reading_range = 1;          // mm
   double prior_scale = 1;
+  bool use_stock_top = true;         // fit the laser's readings of the unmachined top too (absolute w)
   double model_tolerance = 1e-3;     // mm: the POD bound drom run reduces the offline database to
 
   // [run]: what drom run does with the case.

@@ -136,11 +136,11 @@ std::vector<std::string> write_loop_outputs(const std::filesystem::path& out, co
   }
   // Every step on the floor, both runs (the seed's figs. 3.44 and 3.61 plot this along the path).
   {
-    std::string csv = "run,clock_s,program_time_s,pass,x_mm,y_mm,offset_mm,distortion_mm,error_mm,learned\n";
+    std::string csv = "run,clock_s,program_time_s,pass,x_mm,y_mm,offset_mm,offset_sd_mm,distortion_mm,error_mm,learned\n";
     for (const auto* r : {&uncorrected, &corrected})
       for (const auto& s : r->samples) {
-        std::snprintf(line, sizeof line, "%s,%.3f,%.3f,%d,%.3f,%.3f,%.6e,%.6e,%.6e,%d\n", r == &corrected ? "corrected" : "uncorrected", s.clock, s.program_time, s.pass,
-                      s.x, s.y, s.offset, s.distortion, s.error, s.learned ? 1 : 0);
+        std::snprintf(line, sizeof line, "%s,%.3f,%.3f,%d,%.3f,%.3f,%.6e,%.3e,%.6e,%.6e,%d\n", r == &corrected ? "corrected" : "uncorrected", s.clock, s.program_time, s.pass,
+                      s.x, s.y, s.offset, s.offset_sd, s.distortion, s.error, s.learned ? 1 : 0);
         csv += line;
       }
     write_file_atomically(out / "path_samples.csv", csv);

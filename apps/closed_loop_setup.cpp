@@ -36,7 +36,8 @@ double run_stage(int (*command)(const CommandOptions&), const std::string& text,
   const auto database = dir / "database.h5";
   const std::string resolved = case_from_text(text, case_file.string()).resolved_toml;
   if (std::filesystem::exists(database)) {
-    if (Hdf5Reader(database).text_attribute("case") == resolved) return -1;
+    const Hdf5Reader db(database);
+    if (db.text_attribute("case") == resolved && db.has("B1_top")) return -1;  // (databases before B1_top: recompute)
     std::filesystem::remove(database);  // made by another case: recompute
   }
   std::filesystem::create_directories(dir);
@@ -79,6 +80,8 @@ ClosedLoopInputs prepare_closed_loop(const Case& c, const CommandOptions& option
     stage.out = model_file;
     stage.quiet = true;
     stage.tolerance = c.model_tolerance;
+    // The stock's top as far as the laser reaches from the tool on the pocket's edge.
+    if (c.use_stock_top) stage.top_margin = std::hypot(c.sensor_offset[0], c.sensor_offset[1]) + 0.5 * c.sensor_length;
     const auto start = std::chrono::steady_clock::now();
     if (reduce_command(stage) != 0) throw std::runtime_error("drom reduce failed");
     in.reduce_seconds = seconds_since(start);
@@ -112,6 +115,24 @@ ClosedLoopInputs prepare_closed_loop(const Case& c, const CommandOptions& option
     if (it == by_position.end()) throw InputError(truth_file.string() + ": a node of the model's final surface is not in the truth's mesh");
     in.truth.final_displacement.col(i) = B2.block(3 * it->second, 0, 3, 1);
   }
+  // The stock's top at the model's top nodes, held after each node's cut as the model holds it (the
+  // loop reads the top only where the tool has not been; near the cut's edge the held values are the
+  // material's last before the cut, not removed material's).
+  if (in.model.has_top()) {
+    const Eigen::MatrixXd B1_top = read_matrix(h5, "B1_top"), top_ids = read_matrix(h5, "top_nodes");
+    const Eigen::Index ntop = top_ids.rows(), nm = in.model.top.node_count();
+    if (B1_top.rows() != ntop * ns || B1_top.cols() != 1) throw InputError(truth_file.string() + ": B1_top is not stations x top nodes");
+    std::map<long long, Eigen::Index> row_of;  // truth mesh node -> its row among the truth's top nodes
+    for (Eigen::Index i = 0; i < ntop; ++i) row_of[std::llround(top_ids(i, 0))] = i;
+    in.truth.top_history.resize(nm, ns);
+    for (Eigen::Index i = 0; i < nm; ++i) {
+      const auto node = by_position.find(key(in.model.top.nodes().col(i)));
+      const auto row = node == by_position.end() ? row_of.end() : row_of.find(node->second);
+      if (row == row_of.end()) throw InputError(truth_file.string() + ": a node of the model's stock top is not on the truth's top");
+      for (Eigen::Index s = 0; s < ns; ++s)
+        in.truth.top_history(i, s) = s > 0 && in.truth.station_times[s] > in.model.top_cut_time[i] ? in.truth.top_history(i, s - 1) : B1_top(s * ntop + row->second, 0);
+    }
+  }
   return in;
 }
 
@@ -119,6 +140,10 @@ TruthPlay ClosedLoopInputs::play(double factor) const {
   TruthPlay p;
   p.history = std::make_unique<online::SurfaceHistory>(model.target, truth.target_history * factor, truth.station_times);
   p.part.target = p.history.get();
+  if (truth.top_history.size() > 0) {
+    p.top_history = std::make_unique<online::SurfaceHistory>(model.top, truth.top_history * factor, truth.station_times);
+    p.part.top = p.top_history.get();
+  }
   p.part.final_displacement = truth.final_displacement * factor;
   // The stock's top straight above (x, y), found on the part's parametric outer surface.
   p.part.stock_top = [shape = shape](double x, double y) -> std::optional<double> {
@@ -133,6 +158,8 @@ TruthPlay ClosedLoopInputs::play(double factor) const {
 online::PredictorSettings predictor_settings(const Case& c, const reduce::LightModel& model) {
   online::PredictorSettings s;
   s.noise_sd = std::max(std::hypot(c.sensor_noise, model.error_bound()), 1e-6);
+  s.use_stock_top = c.use_stock_top;
+  s.top_noise_sd = std::max(std::hypot(c.sensor_noise, model.top_error_bound), 1e-6);
   s.prior_scale = c.prior_scale;
   s.reading_range = c.reading_range;
   s.learning_tolerance = c.learning_tolerance;

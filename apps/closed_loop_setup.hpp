@@ -20,6 +20,7 @@ Case load_run_case(const CommandOptions& options);
 // The truth run, as the closed loop plays it.
 struct TruthRun {
   Eigen::MatrixXd target_history;        // target nodes x stations (mm)
+  Eigen::MatrixXd top_history;           // the model's top nodes x stations (mm), held after each node's cut; empty without a top
   Eigen::VectorXd station_times;
   Eigen::Matrix3Xd final_displacement;   // at the model's final-shape nodes
   double amplitude = 1;                  // the case's truth.amplitude it was computed with
@@ -27,7 +28,7 @@ struct TruthRun {
 
 // One loop's own copy of the truth (a SurfaceHistory caches, so loops in parallel each need one).
 struct TruthPlay {
-  std::unique_ptr<online::SurfaceHistory> history;
+  std::unique_ptr<online::SurfaceHistory> history, top_history;
   online::TruePart part;
 };
 

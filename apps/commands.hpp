@@ -22,6 +22,8 @@ struct CommandOptions {
   double history_tolerance = -1;    // mm, all space-time compressions together; -1: tolerance / 2
   double profile_scale = -1;        // MPa per unit profile; -1: the case's largest coefficient
   int max_rank = -1;
+  std::string prior_mean = "case";  // the prior's mean: "case" ([stress]'s coefficients) or "zero"
+  double top_margin = -1;           // mm around the pocket of the stock's top to keep; < 0: none
   // drom study
   std::string study_parameter;
   std::vector<double> study_values;

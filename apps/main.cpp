@@ -43,6 +43,13 @@ int main(int argc, char** argv) {
       cmd->add_option("--scale", options.profile_scale, "plausible amplitude per unit profile, MPa (default: the case's largest coefficient)")
           ->check(CLI::PositiveNumber);
       cmd->add_option("--max-rank", options.max_rank, "cap on the number of POD modes")->check(CLI::PositiveNumber);
+      cmd->add_option("--prior-mean", options.prior_mean, "the prior's mean: the case's [stress] profile, or zero")
+          ->capture_default_str()
+          ->check(CLI::IsMember({"case", "zero"}));
+      cmd->add_option("--top-margin", options.top_margin,
+                      "also keep the stock's top within this many mm of the pocket (what the laser reads ahead of the cut and around the "
+                      "pocket); default: the machined floor only")
+          ->check(CLI::NonNegativeNumber);
     } else {
       cmd->add_option("case", case_path, "case file (TOML); see cases/ and docs/case-files.md");
       cmd->add_option("--set", options.overrides, "override a case value, e.g. --set mesh.nx=20 (repeatable)")->take_all();

@@ -106,6 +106,7 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
         LoopSample s;
         s.clock = clock, s.program_time = t_true, s.x = tip.x(), s.y = tip.y();
         s.offset = applied, s.distortion = w;
+        s.offset_sd = predictor.predicted_offset_sd(t_true);
         s.error = applied - required;  // against the ideal path: the program moved with the true target surface
         s.pass = pass;
         s.learned = result.learned_at >= 0;
@@ -130,7 +131,7 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
 
     // 3. A profile: readings from where the sheet truly is, placed where the predictor believes.
     if (k % scan_every == 0) {
-      int hint = -1;
+      int hint = -1, top_hint = -1;
       const HeightField read = [&](double x, double y) -> std::optional<double> {
         const auto p = target.locate(x, y, hint, false);
         if (p) {
@@ -139,10 +140,23 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
         }
         const auto top = truth.stock_top(x, y);
         if (!top) return std::nullopt;
+        if (truth.top)
+          if (const auto q = truth.top->mesh().locate(x, y, top_hint, false)) {
+            top_hint = q->face;
+            return *top + truth.top->at(*q, t_true);
+          }
+        // Without the truth's top there: the floor's w below it (a thin plate bends as one).
         return *top + (p ? w_true.at(*p, t_true) : 0.0);
       };
       const Eigen::Vector3d believed = reckoning.position_at_program_time(t_believed);
       const auto points = scan(settings_.sheet, settings_.errors, believed, tip, read, rng);
+      // Noise-free floor heights only: the rule is about the surface the predictor fits as the floor.
+      const HeightField read_floor = [&](double x, double y) -> std::optional<double> {
+        const auto p = target.locate(x, y, hint, false);
+        if (!p) return std::nullopt;
+        hint = p->face;
+        return floor.surface(x, y, *p, w_true, t_true);
+      };
       if (calibrating && result.profiles % 10 == 0) {
         LaserSheet actual = settings_.sheet;
         actual.offset += settings_.errors.offset_error;
@@ -152,10 +166,9 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
           const Eigen::Vector2d d = where[i] - thought[i];
           if (d.norm() < 1e-9) continue;
           const Eigen::Vector2d u = d.normalized() * 0.5;
-          const auto a = read(where[i].x(), where[i].y()), b = read(thought[i].x(), thought[i].y());
-          const auto b_plus = read(thought[i].x() + u.x(), thought[i].y() + u.y()), b_minus = read(thought[i].x() - u.x(), thought[i].y() - u.y());
-          // Only on the floor (the stock's top and the walls are not what the predictor fits).
-          if (!a || !b || !b_plus || !b_minus || std::abs(*a - *b) > 0.5 || std::abs(*b_plus - *b_minus) > 0.5) continue;
+          const auto a = read_floor(where[i].x(), where[i].y()), b = read_floor(thought[i].x(), thought[i].y());
+          const auto b_plus = read_floor(thought[i].x() + u.x(), thought[i].y() + u.y()), b_minus = read_floor(thought[i].x() - u.x(), thought[i].y() - u.y());
+          if (!a || !b || !b_plus || !b_minus) continue;
           const double bias = *a - *b, expected = (*b_plus - *b_minus) / 1.0 * d.norm();
           sum_be += bias * expected, sum_ee += expected * expected, sum_bb += bias * bias;
           ++result.calibration.points;
@@ -166,7 +179,7 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
       pose.applied_offset = applied;
       const ProfileReport report = predictor.add_profile(t_believed, pose, points);
       ++result.profiles;
-      result.points.used += report.used, result.points.outside += report.outside, result.points.not_yet_cut += report.not_yet_cut;
+      result.points.used += report.used, result.points.used_top += report.used_top, result.points.outside += report.outside, result.points.not_yet_cut += report.not_yet_cut;
       result.points.invalid += report.invalid, result.points.out_of_range += report.out_of_range;
       if (pass > 0) {
         auto& f = result.passes[static_cast<std::size_t>(pass - 1)];
@@ -179,6 +192,7 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
     // 4. At each pass's end: the final shape predicted now, against the truth's.
     while (next_shape < passes_.size() && (t_true >= passes_[next_shape].end || k == steps)) {
       FinalShape shape = predictor.final_shape();
+      result.estimates.push_back(predictor.estimate());
       auto& f = result.passes[next_shape];
       const Eigen::ArrayXd e = (shape.displacement.row(2) - truth.final_displacement.row(2)).transpose().array().abs();
       f.shape_max_error = e.maxCoeff();

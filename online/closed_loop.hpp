@@ -32,6 +32,7 @@ namespace drom::online {
 // The real part, as the simulation needs it.
 struct TruePart {
   const SurfaceHistory* target = nullptr;  // w of the target surface over program time (mm)
+  const SurfaceHistory* top = nullptr;     // w of the stock's top (on the model's top mesh); none: the top reads as not moving
   Eigen::Matrix3Xd final_displacement;     // after unclamping, at the model's final-shape nodes (mm)
   // Nominal altitude of the stock's top at (x, y); nothing off the part.
   std::function<std::optional<double>(double, double)> stock_top;
@@ -59,6 +60,7 @@ struct LoopSample {                    // one step with the tool on the floor
   double clock = 0, program_time = 0;  // true program time
   double x = 0, y = 0;
   double offset = 0;                   // applied (mm)
+  double offset_sd = 0;                // the predictor's standard deviation of the offset it would command now (mm)
   double distortion = 0;               // w_true under the tool (mm)
   double error = 0;                    // offset applied - offset the true target needed: the contact point against the ideal path (mm)
   int pass = 0;                        // 1-based
@@ -95,6 +97,7 @@ struct ClosedLoopResult {
   std::vector<LoopSample> samples;
   std::vector<PassFigures> passes;
   std::vector<FinalShape> shapes;  // the prediction at each pass's end
+  std::vector<Estimate> estimates; // and the fit it came from
   std::vector<OffsetCommand> offsets;
   double learned_at = -1;          // program time (true) at which the predictor declared itself learned
   long long profiles = 0;

@@ -33,17 +33,24 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
   } else {
     prior_precision_ = (settings_.prior_scale * model_.prior_sd).array().square().inverse().matrix().asDiagonal();
   }
+  const Eigen::VectorXd prior_mean = model_.prior_mean.size() == r_ ? model_.prior_mean : Eigen::VectorXd::Zero(r_);
+  prior_rhs_ = prior_precision_ * prior_mean;
   // The same rule as the model's per-node cut times (drom reduce): the tip down within 2 % of the
   // depth of the point's nominal altitude.
   cut_index_ = reduce::CutTimeIndex(model_.path, model_.tool_radius, 0.02 * model_.pocket_depth,
                                     model_.target.node_count() > 0 ? model_.target.nodes().row(2).maxCoeff() + 0.02 * model_.pocket_depth : 0.0);
-  for (const auto& h : model_.histories) {
-    if (h.times().size() != model_.histories.front().times().size() || h.times() != model_.histories.front().times())
-      throw std::invalid_argument("predictor: the model's histories must share their instants");
-    space_by_node_.emplace_back(h.space().transpose());  // a node's terms contiguous: one cache line, not one per term
+  for (const auto* hs : {&model_.histories, &model_.top_histories})
+    for (const auto& h : *hs)
+      if (h.times().size() != model_.histories.front().times().size() || h.times() != model_.histories.front().times())
+        throw std::invalid_argument("predictor: the model's histories must share their instants");
+  target_cache_.reset(model_.histories, n);
+  if (model_.has_top()) {
+    if (static_cast<int>(model_.top_histories.size()) != r_ || model_.top_cut_time.size() != model_.top.node_count())
+      throw std::invalid_argument("predictor: the model's top needs one history per mode and a cut time per node");
+    top_cache_.reset(model_.top_histories, model_.top.node_count());
+    const double top_sd = settings_.top_noise_sd > 0 ? settings_.top_noise_sd : settings_.noise_sd;
+    top_weight_ = settings_.noise_sd / top_sd;
   }
-  instant_values_.setZero(r_, static_cast<Eigen::Index>(n) * kSlots);
-  instant_tag_.assign(static_cast<std::size_t>(n) * kSlots, -1);
   normal_ = Eigen::MatrixXd::Zero(r_, r_);
   rhs_ = Eigen::VectorXd::Zero(r_);
 
@@ -85,10 +92,10 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
       sample_s0y_[j] += p->dy[static_cast<std::size_t>(q)] * z;
     }
   }
-  snapshot_.store(std::make_shared<const Snapshot>(Snapshot{Eigen::VectorXd::Zero(r_), false}));
+  snapshot_.store(std::make_shared<const Snapshot>(Snapshot{prior_mean, prior_precision_.llt().solve(Eigen::MatrixXd::Identity(r_, r_)), false}));
 }
 
-void Predictor::basis_at(const reduce::SurfacePoint& p, double t, double* out) {
+void Predictor::basis_at(InstantCache& cache, const reduce::SurfacePoint& p, double t, double* out) {
   std::fill(out, out + r_, 0.0);
   if (r_ == 0) return;
   const auto& instants = model_.histories.front().times();
@@ -97,21 +104,28 @@ void Predictor::basis_at(const reduce::SurfacePoint& p, double t, double* out) {
   for (int q = 0; q < p.count; ++q) {
     const int node = p.nodes[static_cast<std::size_t>(q)];
     const double N = p.weights[static_cast<std::size_t>(q)];
-    const double* a = node_at_instant(node, at.i);
-    const double* b = node_at_instant(node, next);
+    const double* a = cache.at(node, at.i);
+    const double* b = cache.at(node, next);
     for (int k = 0; k < r_; ++k) out[k] += N * ((1 - at.weight) * a[k] + at.weight * b[k]);
   }
 }
 
-const double* Predictor::node_at_instant(int node, Eigen::Index j) {
+void Predictor::InstantCache::reset(const std::vector<reduce::SpaceTimeField>& h, int nodes) {
+  histories = &h;
+  space_by_node.clear();
+  for (const auto& f : h) space_by_node.emplace_back(f.space().transpose());  // a node's terms contiguous: one cache line, not one per term
+  values.setZero(static_cast<Eigen::Index>(h.size()), static_cast<Eigen::Index>(nodes) * kSlots);
+  tag.assign(static_cast<std::size_t>(nodes) * kSlots, -1);
+}
+
+const double* Predictor::InstantCache::at(int node, Eigen::Index j) {
   const std::size_t slot = static_cast<std::size_t>(node) * kSlots + static_cast<std::size_t>(j % kSlots);
-  double* values = instant_values_.col(static_cast<Eigen::Index>(slot)).data();
-  if (instant_tag_[slot] != j) {
-    instant_tag_[slot] = j;
-    for (int k = 0; k < r_; ++k)
-      values[k] = space_by_node_[static_cast<std::size_t>(k)].col(node).dot(model_.histories[static_cast<std::size_t>(k)].time().row(j));
+  double* v = values.col(static_cast<Eigen::Index>(slot)).data();
+  if (tag[slot] != j) {
+    tag[slot] = j;
+    for (std::size_t k = 0; k < space_by_node.size(); ++k) v[k] = space_by_node[k].col(node).dot((*histories)[k].time().row(j));
   }
-  return values;
+  return v;
 }
 
 double Predictor::applied_offset_at(double t) const { return reduce::step_value(offsets_, t); }
@@ -154,42 +168,64 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
   // leads to, until the picks settle (at most three times).
   double square_error = 0;
   Eigen::Index used = 0;
+  const bool use_top = settings_.use_stock_top && model_.has_top();
   auto gather = [&](const Eigen::VectorXd& alpha) {
     report = ProfileReport{};
     square_error = 0;
     used = 0;
-    int hint = -1;  // consecutive points of a profile mostly share a face
+    int hint = -1, top_hint = -1;  // consecutive points of a profile mostly share a face
     for (const auto& pt : points) {
       if (!std::isfinite(pt.x) || !std::isfinite(pt.y) || !std::isfinite(pt.z)) {
         ++report.invalid;
         continue;
       }
       const auto p = model_.target.locate(pt.x, pt.y, hint, false);
-      if (!p) {
-        ++report.outside;
+      if (p) {
+        hint = p->face;
+        cut_index_.covers({pt.x, pt.y, model_.target.nominal_altitude(*p)}, t, covers_);
+      }
+      if (!p || covers_.empty()) {
+        // Not the machined floor: the stock's top, if the tool has been near none of its face's nodes.
+        const auto q = use_top ? model_.top.locate(pt.x, pt.y, top_hint, false) : std::nullopt;
+        bool standing = q.has_value();
+        if (q) {
+          top_hint = q->face;
+          for (int i = 0; i < q->count && standing; ++i) standing = model_.top_cut_time[q->nodes[static_cast<std::size_t>(i)]] > t;
+        }
+        if (!standing) {
+          ++(p ? report.not_yet_cut : report.outside);
+          continue;
+        }
+        const double m = pt.z - model_.top.nominal_altitude(*q);
+        auto g = G_.row(used);
+        basis_at(top_cache_, *q, t, g.data());
+        if (std::abs(m - g.dot(alpha)) > settings_.reading_range) {
+          ++report.out_of_range;
+          continue;
+        }
+        const double e = m - g.dot(snap->alpha);
+        square_error += e * e;
+        g *= top_weight_;  // one weight in the normal equations: the row carries sigma_floor / sigma_top
+        m_[used] = top_weight_ * m;
+        ++used;
+        ++report.used_top;
         continue;
       }
-      hint = p->face;
       const double s0 = model_.target.nominal_altitude(*p);
-      cut_index_.covers({pt.x, pt.y, s0}, t, covers_);
-      if (covers_.empty()) {
-        ++report.not_yet_cut;
-        continue;
-      }
       // The cut that left the floor here, by the current fit (the fit is linear between the model's
       // instants, as the truth is between its stations).
       const reduce::LowestCut cut = reduce::lowest_cut(
           covers_, instants, offsets_,
           [&](double tau) {
-            basis_at(*p, tau, u_.data());
+            basis_at(target_cache_, *p, tau, u_.data());
             return u_.dot(alpha);
           },
           candidates_, 1e-12);
       const double cut_offset = cut.offset, t_cut = cut.time;
       const double m = pt.z - (s0 + cut_offset);
       auto g = G_.row(used);
-      basis_at(*p, t, g.data());
-      basis_at(*p, t_cut, u_.data());
+      basis_at(target_cache_, *p, t, g.data());
+      basis_at(target_cache_, *p, t_cut, u_.data());
       g -= u_.transpose();
       // Not the machined floor (a wall, the stock's top, a glitch) if far from what the fit expects
       // there. Against the fit, not against the commanded altitude: late in a run the floor has moved
@@ -211,7 +247,7 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
     Eigen::MatrixXd precision = normal_;
     precision.selfadjointView<Eigen::Lower>().rankUpdate(G.transpose(), w);
     precision += prior_precision_;
-    return Eigen::VectorXd(precision.selfadjointView<Eigen::Lower>().llt().solve(rhs_ + w * (G.transpose() * m_.head(used))));
+    return Eigen::VectorXd(precision.selfadjointView<Eigen::Lower>().llt().solve(rhs_ + prior_rhs_ + w * (G.transpose() * m_.head(used))));
   };
   Eigen::VectorXd pick = snap->alpha;
   gather(pick);
@@ -252,7 +288,8 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
   }
   Eigen::MatrixXd precision = normal_;
   precision += prior_precision_;
-  snapshot_.store(std::make_shared<const Snapshot>(Snapshot{precision.llt().solve(rhs_), learned_}), std::memory_order_release);
+  const Eigen::LLT<Eigen::MatrixXd> llt(precision);
+  snapshot_.store(std::make_shared<const Snapshot>(Snapshot{llt.solve(rhs_ + prior_rhs_), llt.solve(Eigen::MatrixXd::Identity(r_, r_)), learned_}), std::memory_order_release);
   return report;
 }
 
@@ -262,7 +299,7 @@ Estimate Predictor::estimate() const {
   precision += prior_precision_;
   const Eigen::LLT<Eigen::MatrixXd> llt(precision);
   Estimate e;
-  e.alpha = llt.solve(rhs_);
+  e.alpha = llt.solve(rhs_ + prior_rhs_);
   e.covariance = llt.solve(Eigen::MatrixXd::Identity(r_, r_));
   e.points = points_;
   e.profiles = profiles_;
@@ -307,6 +344,23 @@ double Predictor::predicted_offset(double t) const {
     return w + model_.tool_radius * (std::sqrt(1 + (sx + gx) * (sx + gx) + (sy + gy) * (sy + gy)) - std::sqrt(1 + sx * sx + sy * sy));
   };
   return (1 - a) * at(j) + a * at(j + 1);
+}
+
+Eigen::RowVectorXd Predictor::offset_gradient(Eigen::Index i, const Eigen::VectorXd& alpha) const {
+  if (sample_inside_[i] == 0) return Eigen::RowVectorXd::Zero(r_);
+  if (model_.tool_shape != reduce::ToolShape::Ball) return sample_w_.row(i);
+  const double sx = sample_s0x_[i] + sample_wx_.row(i).dot(alpha), sy = sample_s0y_[i] + sample_wy_.row(i).dot(alpha);
+  const double k = model_.tool_radius / std::sqrt(1 + sx * sx + sy * sy);
+  return sample_w_.row(i) + k * (sx * sample_wx_.row(i) + sy * sample_wy_.row(i));
+}
+
+double Predictor::predicted_offset_sd(double t) const {
+  const auto snap = snapshot();
+  if (!snap->learned || sample_time_.size() == 0) return 0;
+  const auto [j, a] = reduce::locate_time(sample_time_, t);
+  const Eigen::RowVectorXd g = sample_time_.size() == 1 ? offset_gradient(0, snap->alpha)
+                                                        : Eigen::RowVectorXd((1 - a) * offset_gradient(j, snap->alpha) + a * offset_gradient(j + 1, snap->alpha));
+  return std::sqrt(std::max(0.0, g.dot(snap->covariance * g.transpose())));
 }
 
 double Predictor::tool_offset(double t) {

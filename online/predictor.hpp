@@ -5,6 +5,10 @@
 // z_cmd = S0(x, y) + (offset applied at t_cut), a laser point read at program time t is
 //   z = z_cmd + w(x, y, t) - w(x, y, t_cut) + noise,   w = sum_k alpha_k U1_k,
 // so m = z - z_cmd is linear in alpha through the differenced basis U1_k(x, y, t) - U1_k(x, y, t_cut).
+// Where the tool has not been (the stock's top, ahead of the cut and around the pocket), when the
+// model carries the top, a point reads the top's nominal altitude plus its w since machining began:
+//   z = S0_top(x, y) + w_top(x, y, t) + noise,   w_top = sum_k alpha_k U1_top_k,
+// an absolute measurement of the same alpha, where the floor's is a difference since the cut.
 // The fit is Bayesian least squares: normal equations accumulated profile by profile (cost
 // independent of what came before), a Gaussian prior on alpha from the model (its prior covariance, or diag(prior_sd^2))
 // (a profile with independent coefficients of standard deviation profile_scale), and the posterior
@@ -46,10 +50,13 @@ struct PredictorSettings {
   int learning_window = 5;          // profiles the learning criterion looks back on
   double max_offset_rate = 1.0;     // mm/s of program time: rate limit of the commanded offset
   double path_sample = 2.0;         // mm between the precomputed samples of the path's offsets
+  bool use_stock_top = true;        // fit readings of the stock's top too (when the model has it)
+  double top_noise_sd = -1;         // mm: sigma of those readings; <= 0: noise_sd
 };
 
 struct ProfileReport {
   int used = 0, outside = 0, not_yet_cut = 0, invalid = 0, out_of_range = 0;
+  int used_top = 0;           // of `used`, readings of the stock's top (the rest are of the machined floor)
   double predictive_rms = 0;  // of the used points against the fit before they were added (mm)
 };
 
@@ -102,6 +109,9 @@ class Predictor {
   // 3.37-3.38). The vertical offset is the same whether the program gives the tool tip or the ball's
   // centre: add it to whichever the program gives. 0 until learned.
   double predicted_offset(double t) const;
+  // Its standard deviation under the fit's posterior (linearized in alpha for ball end mills); 0
+  // until learned, as the offset.
+  double predicted_offset_sd(double t) const;
   // predicted_offset rate-limited from the last value returned (control thread only).
   double tool_offset(double t);
   double commanded_altitude(double t, double programmed_z) { return programmed_z + tool_offset(t); }
@@ -115,8 +125,11 @@ class Predictor {
  private:
   struct Snapshot {
     Eigen::VectorXd alpha;
+    Eigen::MatrixXd covariance;
     bool learned = false;
   };
+  // d(offset)/d(alpha) at path sample i, for the fit alpha.
+  Eigen::RowVectorXd offset_gradient(Eigen::Index i, const Eigen::VectorXd& alpha) const;
   Eigen::RowVectorXd basis_at(const reduce::SurfacePoint& p, double t) const;  // U1_k(x, y, t), k = 1..r
   double applied_offset_at(double t) const;
   void set_offset(double t, double offset);
@@ -126,6 +139,7 @@ class Predictor {
   PredictorSettings settings_;
   int r_ = 0;
   Eigen::MatrixXd prior_precision_;
+  Eigen::VectorXd prior_rhs_;  // prior precision x prior mean
   // Path samples for the offsets: program time, and per sample U1_k and its x / y derivatives at the
   // tool's position, plus the nominal surface's slope there (ball end mills).
   Eigen::VectorXd sample_time_;
@@ -141,13 +155,20 @@ class Predictor {
   // a small per-node cache (slot j mod kSlots): a profile touches a few instants per node (its own
   // time interval, and the cut times of the two or three passes under the sheet).
   static constexpr int kSlots = 32;
-  const double* node_at_instant(int node, Eigen::Index j);
-  void basis_at(const reduce::SurfacePoint& p, double t, double* out);  // U1_k(x, t), k = 1..r
+  struct InstantCache {
+    const std::vector<reduce::SpaceTimeField>* histories = nullptr;
+    std::vector<Eigen::MatrixXd> space_by_node;  // per mode: its space factors, terms x nodes
+    Eigen::MatrixXd values;                      // r x (nodes * kSlots)
+    std::vector<Eigen::Index> tag;               // the instant each slot holds (-1: none)
+    void reset(const std::vector<reduce::SpaceTimeField>& h, int nodes);
+    const double* at(int node, Eigen::Index j);
+  };
+  // sum_q N_q U_k(node_q, t), k = 1..r, from a surface's cache.
+  void basis_at(InstantCache& cache, const reduce::SurfacePoint& p, double t, double* out);
   std::vector<std::pair<double, double>> covers_;
   std::vector<double> candidates_;
-  std::vector<Eigen::MatrixXd> space_by_node_;  // per mode: its space factors, terms x nodes
-  Eigen::MatrixXd instant_values_;              // r x (nodes * kSlots)
-  std::vector<Eigen::Index> instant_tag_;       // the instant each slot holds (-1: none)
+  InstantCache target_cache_, top_cache_;
+  double top_weight_ = 1;                       // sigma_floor / sigma_top: a top row's scale in the shared normal equations
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> G_;  // the profile's differenced basis, points x r
   Eigen::VectorXd m_;                           // and its readings net of the commanded altitude
   Eigen::VectorXd u_;

@@ -45,7 +45,7 @@ void LightModel::write(const std::filesystem::path& file) const {
                              "w(target node n, program time t) = sum_k alpha_k U1_k(n, t), U1_k = history_<k>_space (nodes x terms) "
                              "times the rows of history_<k>_time interpolated linearly in history_times; final shape (shape node i, "
                              "component c) = sum_k alpha_k final_basis[3 i + c, k]; alpha = diag(singular_values[:r]) right^T c / "
-                             "profile_scale for profile coefficients c (MPa); prior alpha ~ N(0, diag(prior_sd^2))"));
+                             "profile_scale for profile coefficients c (MPa); prior alpha ~ N(prior_mean or 0, prior_covariance or diag(prior_sd^2))"));
   h5.attribute("case", case_toml);
   h5.attribute("database_hash", database_hash);
   h5.attribute("rank", static_cast<double>(rank()));
@@ -71,10 +71,27 @@ void LightModel::write(const std::filesystem::path& file) const {
   put(h5, "right", right);
   put(h5, "prior_sd", prior_sd);
   if (prior_covariance.size() > 0) put(h5, "prior_covariance", prior_covariance);
+  if (prior_mean.size() > 0) put(h5, "prior_mean", prior_mean);
   if (!histories.empty()) put(h5, "history_times", histories.front().times());
   for (int k = 0; k < rank(); ++k) {
     put_single(h5, "history_" + std::to_string(k) + "_space", histories[static_cast<std::size_t>(k)].space());
     put_single(h5, "history_" + std::to_string(k) + "_time", histories[static_cast<std::size_t>(k)].time());
+  }
+  if (has_top()) {
+    h5.attribute("top_face_nodes", static_cast<double>(top.nodes_per_face()));
+    h5.attribute("top_history_bound_mm", top_history_bound);
+    h5.attribute("top_error_bound_mm", top_error_bound);
+    put(h5, "top_nodes", top.nodes().transpose());
+    h5.write("top_faces", as_doubles(top.faces()), top.faces().size() / static_cast<std::size_t>(std::max(1, top.nodes_per_face())),
+             static_cast<std::size_t>(top.nodes_per_face()));
+    Eigen::VectorXd top_cut = top_cut_time;
+    for (auto& t : top_cut)
+      if (!std::isfinite(t)) t = -1;
+    put(h5, "top_cut_time", top_cut);
+    for (int k = 0; k < rank(); ++k) {
+      put_single(h5, "top_history_" + std::to_string(k) + "_space", top_histories[static_cast<std::size_t>(k)].space());
+      put_single(h5, "top_history_" + std::to_string(k) + "_time", top_histories[static_cast<std::size_t>(k)].time());
+    }
   }
   put(h5, "shape_nodes", shape_nodes.transpose());
   h5.write("shape_faces", as_doubles(shape_faces), shape_faces.size() / static_cast<std::size_t>(std::max(1, shape_face_nodes)),
@@ -126,6 +143,10 @@ LightModel LightModel::read(const std::filesystem::path& file) {
     if (m.prior_covariance.rows() != r || m.prior_covariance.cols() != r || !m.prior_covariance.allFinite())
       throw fail("prior_covariance: a finite rank x rank matrix expected");
   }
+  if (h5.has("prior_mean")) {
+    m.prior_mean = get(h5, "prior_mean");
+    if (m.prior_mean.size() != r || !m.prior_mean.allFinite()) throw fail("prior_mean: rank finite values expected");
+  }
   if (m.right.cols() != r || m.prior_sd.size() != r || m.singular_values.size() < r) throw fail("rank " + std::to_string(r) + " disagrees with right / prior_sd / singular_values");
   const Eigen::VectorXd times = r > 0 ? Eigen::VectorXd(get(h5, "history_times")) : Eigen::VectorXd();
   for (int k = 0; k < r; ++k) {
@@ -136,6 +157,30 @@ LightModel LightModel::read(const std::filesystem::path& file) {
       m.histories.emplace_back(std::move(space), std::move(time), times, 0.0);
     } catch (const std::invalid_argument& e) {
       throw fail(name + ": " + e.what());
+    }
+  }
+  if (h5.has("top_nodes")) {
+    try {
+      m.top = SurfaceMesh(get(h5, "top_nodes").transpose(), indices("top_faces"), static_cast<int>(h5.number_attribute("top_face_nodes")));
+    } catch (const std::invalid_argument& e) {
+      throw fail(std::string("top surface: ") + e.what());
+    }
+    m.top_history_bound = h5.number_attribute("top_history_bound_mm");
+    m.top_error_bound = h5.number_attribute("top_error_bound_mm");
+    m.top_cut_time = get(h5, "top_cut_time");
+    for (auto& t : m.top_cut_time)
+      if (t < 0) t = std::numeric_limits<double>::infinity();
+    if (m.top_cut_time.size() != m.top.node_count()) throw fail("top_cut_time: one value per top node expected");
+    for (int k = 0; k < r; ++k) {
+      const std::string name = "top_history_" + std::to_string(k);
+      Eigen::MatrixXd space = get(h5, name + "_space"), time = get(h5, name + "_time");
+      if (space.rows() != m.top.node_count()) throw fail(name + "_space: one row per top node expected");
+      if (!space.allFinite() || !time.allFinite()) throw fail(name + " holds NaN or infinite values");
+      try {
+        m.top_histories.emplace_back(std::move(space), std::move(time), times, 0.0);
+      } catch (const std::invalid_argument& e) {
+        throw fail(name + ": " + e.what());
+      }
     }
   }
   m.shape_nodes = get(h5, "shape_nodes").transpose();

@@ -7,6 +7,8 @@
 //     sum_l a_l(node) b_l(t) (history_<k>_space, history_<k>_time over `history_times`);
 //   - the POD's singular values and right vectors, its bounds and tolerances;
 //   - U2 = B2 V_r D_r^-1 on the final part's surface (its nodes and faces);
+//   - optionally U1_top = B1_top V_r D_r^-1 on the stock's top face (top_history_<k>_space / _time),
+//     its nodes, faces and cut times;
 //   - the prior on the coefficients alpha, the tool and the programmed path (tool tip, program time),
 //   - the case (TOML) and the content hash of the database it came from.
 // alpha relates to the case's unit profiles by alpha = D_r V_r^T c / profile_scale, with c the profile
@@ -39,13 +41,21 @@ struct LightModel {
   Eigen::MatrixXd final_basis;                // U2: (3 * shape nodes) x r, rows (node, component)
   Eigen::VectorXd prior_sd;                   // alpha ~ N(0, diag(prior_sd^2)), or
   Eigen::MatrixXd prior_covariance;           // r x r when the coefficients' plausible amplitudes differ (prior_sd its diagonal's root)
+  Eigen::VectorXd prior_mean;                 // r: the expected alpha (the case's own profile); empty: 0
   ToolShape tool_shape = ToolShape::Flat;
   double tool_radius = 0;
   Eigen::MatrixXd path;                       // waypoints x 4: tool tip x, y, z and program time
   double pocket_depth = 0;                    // mm below the top: the target surface's depth
+  // Optional: the stock's top face, read by the laser where the tool has not been. U1_top over the
+  // same instants as U1 (held after each node's cut), its nodes' cut times, and its measured error.
+  SurfaceMesh top;
+  Eigen::VectorXd top_cut_time;
+  std::vector<SpaceTimeField> top_histories;
+  double top_history_bound = 0, top_error_bound = 0;  // mm: compression alone; truncation and compression
   std::string case_toml, database_hash;
 
   int rank() const { return static_cast<int>(histories.size()); }
+  bool has_top() const { return !top_histories.empty(); }
   // The bound on the model's max error for any one database column (mm at profile_scale).
   double error_bound() const { return pod_max_bound + history_bound; }
 

@@ -5,6 +5,22 @@
 
 namespace drom::reduce {
 
+namespace {
+
+// sigma_k U_k as a space-time field within `tolerance` (mm), its factors rounded to single precision
+// as the model file keeps them (the error, measured at the stations after rounding, covers what is
+// written), stored per unit U_k.
+SpaceTimeField compressed_history(const Eigen::MatrixXd& scaled, double sigma, const Eigen::VectorXd& times, double tolerance, double start, int& terms) {
+  const SpaceTimeField field(scaled, times, tolerance, start);
+  const Eigen::MatrixXd space = field.space().cast<float>().cast<double>();
+  const Eigen::MatrixXd time = (field.time() / sigma).cast<float>().cast<double>();
+  const double error = (scaled - sigma * space * time.bottomRows(times.size()).transpose()).cwiseAbs().maxCoeff();  // (a start instant may lead)
+  terms += field.terms();
+  return SpaceTimeField(space, time, field.times(), error / sigma);
+}
+
+}  // namespace
+
 ReductionReport reduce_snapshots(const SnapshotDatabase& db, const ReductionSettings& settings, LightModel& model) {
   const auto start = std::chrono::steady_clock::now();
   const Eigen::Index stations = db.station_times.size(), P = db.B1.cols();
@@ -34,6 +50,12 @@ ReductionReport reduce_snapshots(const SnapshotDatabase& db, const ReductionSett
     model.prior_sd = model.prior_covariance.diagonal().cwiseSqrt();
   }
 
+  model.prior_mean.resize(0);
+  if (settings.profile_mean.size() > 0) {
+    if (settings.profile_mean.size() != P || !settings.profile_mean.allFinite()) throw std::invalid_argument("profile_mean: one finite value per database column expected");
+    model.prior_mean = pod.singular_values.head(r).asDiagonal() * pod.right.leftCols(r).transpose() * (settings.profile_mean / settings.profile_scale);
+  }
+
   // 3. Space-time form of each history, compressed in mm (sigma_k U1_k), stored per unit U1_k.
   ReductionReport report;
   model.histories.clear();
@@ -41,19 +63,32 @@ ReductionReport reduce_snapshots(const SnapshotDatabase& db, const ReductionSett
   for (int k = 0; k < r; ++k) {
     const double sigma = pod.singular_values[k];
     const Eigen::Map<const Eigen::MatrixXd> history(pod.modes.col(k).data(), nodes, stations);
-    const Eigen::MatrixXd target = sigma * history;
-    const SpaceTimeField scaled(target, db.station_times, settings.history_tolerance / r, db.program_start);
-    // The model file keeps the factors in single precision (half the size): round them here, and
-    // measure the rounded form's error at the stations, so the bound covers what is written.
-    const Eigen::MatrixXd space = scaled.space().cast<float>().cast<double>();
-    const Eigen::MatrixXd time = (scaled.time() / sigma).cast<float>().cast<double>();
-    const double error = (target - sigma * space * time.bottomRows(stations).transpose()).cwiseAbs().maxCoeff();  // (a start instant may lead)
-    model.histories.emplace_back(space, time, scaled.times(), error / sigma);
-    model.history_bound += error;
-    report.history_terms += scaled.terms();
+    model.histories.push_back(compressed_history(sigma * history, sigma, db.station_times, settings.history_tolerance / r, db.program_start, report.history_terms));
+    model.history_bound += sigma * model.histories.back().bound();
   }
 
-  // 4. Final-shape basis: alpha = D V^T c / s maps back to B2 c.
+  // 4. The stock's top: the same combination of its snapshots, held after each node's cut.
+  model.top_histories.clear();
+  model.top_history_bound = 0;
+  const Eigen::Index top_nodes = db.B1_top.size() > 0 ? db.B1_top.rows() / stations : 0;
+  Eigen::MatrixXd top_scaled;
+  if (top_nodes > 0) {
+    if (db.B1_top.rows() != top_nodes * stations || db.B1_top.cols() != P || db.top_cut_time.size() != top_nodes)
+      throw std::invalid_argument("B1_top is not (stations x top nodes) x profiles with a cut time per top node");
+    top_scaled = settings.profile_scale * db.B1_top;
+    for (Eigen::Index n = 0; n < top_nodes; ++n)
+      for (Eigen::Index s = 1; s < stations; ++s)
+        if (db.station_times[s] > db.top_cut_time[n]) top_scaled.row(s * top_nodes + n) = top_scaled.row((s - 1) * top_nodes + n);
+    const Eigen::MatrixXd top_modes = top_scaled * pod.right.leftCols(r) * pod.singular_values.head(r).cwiseInverse().asDiagonal();  // U1_top, stacked
+    for (int k = 0; k < r; ++k) {
+      const double sigma = pod.singular_values[k];
+      const Eigen::Map<const Eigen::MatrixXd> history(top_modes.col(k).data(), top_nodes, stations);
+      model.top_histories.push_back(compressed_history(sigma * history, sigma, db.station_times, settings.history_tolerance / r, db.program_start, report.history_terms));
+      model.top_history_bound += sigma * model.top_histories.back().bound();
+    }
+  }
+
+  // 5. Final-shape basis: alpha = D V^T c / s maps back to B2 c.
   model.final_basis = (settings.profile_scale * db.final_shape * pod.right * pod.singular_values.head(r).cwiseInverse().asDiagonal()).cast<float>().cast<double>();
 
   // What the model gives for each database column, against the column (both in mm at profile_scale).
@@ -64,6 +99,16 @@ ReductionReport reduce_snapshots(const SnapshotDatabase& db, const ReductionSett
     const Eigen::MatrixXd w = at * alpha;
     report.measured_max_error = std::max(report.measured_max_error, (w - A.middleRows(s * nodes, nodes)).cwiseAbs().maxCoeff());
   }
+  // And on the top, where the material is still there (the POD did not choose its modes for the top,
+  // so this is the top's only bound: truncation and compression together).
+  for (Eigen::Index s = 0; s < stations && top_nodes > 0; ++s) {
+    Eigen::MatrixXd at(top_nodes, r);
+    for (int k = 0; k < r; ++k) at.col(k) = model.top_histories[static_cast<std::size_t>(k)].at(db.station_times[s]);
+    const Eigen::MatrixXd e = at * alpha - top_scaled.middleRows(s * top_nodes, top_nodes);
+    for (Eigen::Index n = 0; n < top_nodes; ++n)
+      if (db.station_times[s] <= db.top_cut_time[n]) report.top_measured_max_error = std::max(report.top_measured_max_error, e.row(n).cwiseAbs().maxCoeff());
+  }
+  model.top_error_bound = report.top_measured_max_error;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }

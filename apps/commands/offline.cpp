@@ -117,11 +117,16 @@ int simulate(const CommandOptions& options, bool truth) {
   } catch (const std::invalid_argument& e) {
     throw InputError(c.origin + ": mesh.nz: " + e.what());
   }
+  // The stock's top face, all of it: where the tool has not been, a laser reads it, and its w is an
+  // absolute measurement (not a difference since a cut, as on the floor).
+  const std::vector<int> top = fem::target_surface_nodes(mesh, part.shape, {0, part.shape.length_u(), 0, part.shape.length_v(), part.shape.thickness()});
   const std::vector<fem::StressProfile> profiles = truth ? std::vector<fem::StressProfile>{part.truth_profile} : fem::unit_profiles(part.degrees);
   const auto P = static_cast<Eigen::Index>(profiles.size());
   const std::string mode = truth ? "truth" : "offline";
   const std::uint64_t case_hash = fnv1a(c.resolved_toml.data(), c.resolved_toml.size());
-  Checkpoint checkpoint(options.out / ".checkpoint", mode + " " + hex(case_hash) + "\n", options.resume);
+  // Rows per station: the target's nodes, then the top's ("+top": checkpoints of runs before the top
+  // was kept hold fewer rows and are not mixed in).
+  Checkpoint checkpoint(options.out / ".checkpoint", mode + "+top " + hex(case_hash) + "\n", options.resume);
 
   // 1. Removal: the activity of every station (level set, a few seconds).
   MachiningRun run(c, part);
@@ -187,8 +192,9 @@ int simulate(const CommandOptions& options, bool truth) {
           }
           const Eigen::MatrixXd U = solver->solve(activity[k], k > first);
           if (saved) continue;
-          Eigen::MatrixXd W(static_cast<Eigen::Index>(target.size()), P);
+          Eigen::MatrixXd W(static_cast<Eigen::Index>(target.size() + top.size()), P);
           for (std::size_t i = 0; i < target.size(); ++i) W.row(static_cast<Eigen::Index>(i)) = U.row(3 * target[i] + 2);
+          for (std::size_t i = 0; i < top.size(); ++i) W.row(static_cast<Eigen::Index>(target.size() + i)) = U.row(3 * top[i] + 2);
           if (is_frame(k)) solver->write_vtu(options.out / "frames" / (station_name(k) + ".vtu"), names(U));
           checkpoint.save(station_name(k), W);
           std::lock_guard<std::mutex> lock(report);
@@ -230,12 +236,15 @@ int simulate(const CommandOptions& options, bool truth) {
   }
 
   // 5. The database, from the checkpoints (so a resumed run writes the same bytes).
-  const auto nt = target.size();
-  std::vector<double> B1(ns * nt * static_cast<std::size_t>(P));
+  const auto nt = target.size(), ntop = top.size();
+  std::vector<double> B1(ns * nt * static_cast<std::size_t>(P)), B1_top(ns * ntop * static_cast<std::size_t>(P));
   for (std::size_t k = 0; k < ns; ++k) {
     const Eigen::MatrixXd W = checkpoint.load(station_name(k));
+    if (W.rows() != static_cast<Eigen::Index>(nt + ntop) || W.cols() != P) throw InputError(checkpoint.file(station_name(k)).string() + ": not this run's station");
     for (std::size_t i = 0; i < nt; ++i)
       for (Eigen::Index p = 0; p < P; ++p) B1[(k * nt + i) * static_cast<std::size_t>(P) + static_cast<std::size_t>(p)] = W(static_cast<Eigen::Index>(i), p);
+    for (std::size_t i = 0; i < ntop; ++i)
+      for (Eigen::Index p = 0; p < P; ++p) B1_top[(k * ntop + i) * static_cast<std::size_t>(P) + static_cast<std::size_t>(p)] = W(static_cast<Eigen::Index>(nt + i), p);
   }
   const Eigen::MatrixXd U2 = checkpoint.load("final");
   std::vector<double> B2(static_cast<std::size_t>(U2.size()));
@@ -251,6 +260,7 @@ int simulate(const CommandOptions& options, bool truth) {
     target_ids[i] = target[i];
     for (int d = 0; d < 3; ++d) target_xyz[3 * i + static_cast<std::size_t>(d)] = mesh.nodes[static_cast<std::size_t>(target[i])][d];
   }
+  std::vector<double> top_ids(top.begin(), top.end());
   for (int n = 0; n < mesh.node_count(); ++n)
     for (int d = 0; d < 3; ++d) nodes[3 * static_cast<std::size_t>(n) + static_cast<std::size_t>(d)] = mesh.nodes[static_cast<std::size_t>(n)][d];
   std::vector<double> connectivity(mesh.connectivity.begin(), mesh.connectivity.end());
@@ -264,10 +274,13 @@ int simulate(const CommandOptions& options, bool truth) {
   }
   std::uint64_t content = fnv1a(B1.data(), B1.size() * sizeof(double), case_hash);
   content = fnv1a(B2.data(), B2.size() * sizeof(double), content);
+  content = fnv1a(B1_top.data(), B1_top.size() * sizeof(double), content);
   {
     Hdf5Writer h5(options.out / "database.h5");
     h5.write("B1", B1, ns * nt, static_cast<std::size_t>(P));
     h5.write("B2", B2, static_cast<std::size_t>(U2.rows()), static_cast<std::size_t>(P));
+    h5.write("B1_top", B1_top, ns * ntop, static_cast<std::size_t>(P));
+    h5.write("top_nodes", top_ids, ntop, 1);
     h5.write("station_time", time, ns, 1);
     h5.write("station_path_length", length, ns, 1);
     h5.write("station_position", position, ns, 3);
@@ -293,6 +306,7 @@ int simulate(const CommandOptions& options, bool truth) {
     h5.attribute("content_hash", hex(content));
     h5.attribute("element", std::string(fem::element_name(mesh.type)));
     h5.attribute("layout", std::string("B1[(station * n_target + i), profile] = w of target node i at the station; "
+                                       "B1_top[(station * n_top + i), profile] = w of the stock's top node i (top_nodes) at the station; "
                                        "B2[3 * node + component, profile] = free final shape after best-fit alignment"));
     h5.commit();
   }
@@ -313,6 +327,7 @@ int simulate(const CommandOptions& options, bool truth) {
                               {"unknowns", mesh.dof_count()},
                               {"profiles", P},
                               {"target_nodes", nt},
+                              {"top_nodes", ntop},
                               {"threads", threads},
                               {"time_s", elapsed()},
                               {"removal_time_s", removal_seconds},

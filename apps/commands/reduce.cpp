@@ -143,9 +143,42 @@ int reduce_command(const CommandOptions& options) {
   }
   model.shape_faces = local_faces(shape_faces, shape_local);
   model.shape_face_nodes = static_cast<int>(shape_faces.front().nodes.size());
+  // The stock's top, when the database has it (databases written before it did not).
+  std::vector<int> top;
+  std::map<int, int> top_local;
+  Eigen::Matrix3Xd top_xyz;
+  const PartModel part = build_part(c);
+  if (options.top_margin >= 0) {
+    if (!h5.has("B1_top")) throw InputError(db_path.string() + ": no B1_top (written before drom offline kept the stock's top); run drom offline again for --top-margin");
+    const Eigen::MatrixXd B1_top = read_matrix(h5, "B1_top"), top_ids = read_matrix(h5, "top_nodes");
+    const Eigen::Index ntop = top_ids.rows(), ns = db.station_times.size();
+    if (ntop == 0 || B1_top.rows() != ntop * ns || B1_top.cols() != db.B1.cols())
+      throw InputError(db_path.string() + ": B1_top has " + std::to_string(B1_top.rows()) + " rows, expected stations x top nodes");
+    if (!B1_top.allFinite()) throw InputError(db_path.string() + ": B1_top holds NaN or infinite values");
+    // The top within the margin of the pocket's footprint (in the part's own surface coordinates).
+    std::vector<Eigen::Index> rows;
+    for (Eigen::Index i = 0; i < ntop; ++i) {
+      const int node = static_cast<int>(top_ids(i, 0));
+      if (node < 0 || node >= mesh.node_count()) throw InputError(db_path.string() + ": top_nodes names a node that does not exist");
+      const Eigen::Vector3d uvt = part.shape.to_parametric(mesh.nodes[static_cast<std::size_t>(node)]);
+      const double m = options.top_margin + 1e-9;
+      if (uvt.x() < c.pocket_x - m || uvt.x() > c.pocket_x + c.pocket_length_x + m || uvt.y() < c.pocket_y - m || uvt.y() > c.pocket_y + c.pocket_length_y + m) continue;
+      top_local[node] = static_cast<int>(top.size());
+      top.push_back(node);
+      rows.push_back(i);
+    }
+    top_xyz.resize(3, static_cast<Eigen::Index>(top.size()));
+    db.B1_top.resize(static_cast<Eigen::Index>(top.size()) * ns, B1_top.cols());
+    for (std::size_t j = 0; j < top.size(); ++j) {
+      top_xyz.col(static_cast<Eigen::Index>(j)) = mesh.nodes[static_cast<std::size_t>(top[j])];
+      for (Eigen::Index s = 0; s < ns; ++s) db.B1_top.row(s * static_cast<Eigen::Index>(top.size()) + static_cast<Eigen::Index>(j)) = B1_top.row(s * ntop + rows[j]);
+    }
+    const auto top_faces = fem::faces_within(mesh, top);
+    if (top_faces.empty()) throw InputError(db_path.string() + ": no element face of the stock's top lies within --top-margin of the pocket");
+    model.top = reduce::SurfaceMesh(top_xyz, local_faces(top_faces, top_local), static_cast<int>(top_faces.front().nodes.size()));
+  }
 
   // 3. Path, tool, and when each target node was cut.
-  const PartModel part = build_part(c);
   const levelset::Toolpath toolpath = build_toolpath(c, part);
   const levelset::PathTimeline timeline(toolpath);
   std::vector<char> cutting;
@@ -158,6 +191,12 @@ int reduce_command(const CommandOptions& options) {
   const double z_tolerance = 0.02 * c.pocket_depth;
   for (std::size_t i = 0; i < nt; ++i)
     model.target_cut_time[static_cast<Eigen::Index>(i)] = reduce::first_cover_time(model.path, cutting, target_xyz.col(static_cast<Eigen::Index>(i)), tool.radius, z_tolerance);
+  // A top node is gone once the tool has been down to the floor under it.
+  model.top_cut_time.resize(static_cast<Eigen::Index>(top.size()));
+  for (std::size_t i = 0; i < top.size(); ++i)
+    model.top_cut_time[static_cast<Eigen::Index>(i)] =
+        reduce::first_cover_time(model.path, cutting, top_xyz.col(static_cast<Eigen::Index>(i)) - Eigen::Vector3d(0, 0, c.pocket_depth), tool.radius, z_tolerance);
+  db.top_cut_time = model.top_cut_time;
   db.program_start = 0;
 
   // 4. Reduction.
@@ -176,6 +215,14 @@ int reduce_command(const CommandOptions& options) {
     Eigen::Index j = 0;
     for (double v : c.sigma11) settings.profile_sd[j++] = std::max(std::abs(v), 0.1 * settings.profile_scale);
     for (double v : c.sigma22) settings.profile_sd[j++] = std::max(std::abs(v), 0.1 * settings.profile_scale);
+  }
+  // The prior's mean: the case's own profile, the one the stock is expected to carry (a quenched
+  // plate's skins are in compression, not as likely in tension: a zero mean would say they are).
+  if (options.prior_mean == "case" && static_cast<Eigen::Index>(c.sigma11.size() + c.sigma22.size()) == db.B1.cols()) {
+    settings.profile_mean.resize(db.B1.cols());
+    Eigen::Index j = 0;
+    for (double v : c.sigma11) settings.profile_mean[j++] = v;
+    for (double v : c.sigma22) settings.profile_mean[j++] = v;
   }
   const auto report = reduce::reduce_snapshots(db, settings, model);
   model.case_toml = h5.text_attribute("case");
@@ -237,6 +284,7 @@ int reduce_command(const CommandOptions& options) {
                           {"rank", model.rank()},
                           {"prior", model.prior_covariance.size() > 0 ? "each unit profile at the case's own coefficient magnitude (full covariance)"
                                                                       : "every unit profile at profile_scale (diagonal)"},
+                          {"prior_mean", model.prior_mean.size() > 0 ? "the case's [stress] profile" : "zero"},
                           {"profiles", db.B1.cols()},
                           {"profile_scale_mpa", settings.profile_scale},
                           {"tolerance_mm", settings.tolerance},
@@ -250,6 +298,9 @@ int reduce_command(const CommandOptions& options) {
                           {"singular_values_mm", sigma},
                           {"target_nodes", nt},
                           {"target_nodes_never_cut", never_cut},
+                          {"top_nodes", top.size()},
+                          {"top_error_bound_mm", model.top_error_bound},
+                          {"top_history_bound_mm", model.top_history_bound},
                           {"shape_nodes", model.shape_nodes.cols()},
                           {"model_mb", model_mb},
                           {"database_mb", db_mb},
@@ -263,6 +314,7 @@ int reduce_command(const CommandOptions& options) {
     std::printf("  error bound       %.3g mm (POD %.3g + histories %.3g; tolerance %.3g + %.3g)\n", model.error_bound(), model.pod_max_bound,
                 model.history_bound, settings.tolerance, settings.history_tolerance);
     std::printf("  measured max err  %.3g mm against the database\n", report.measured_max_error);
+    if (model.has_top()) std::printf("  stock's top       %zu nodes, measured max err %.3g mm where still there\n", top.size(), model.top_error_bound);
     std::printf("  size              %.2f MB (database %.1f MB)\n", model_mb, db_mb);
   }
   return 0;

@@ -38,7 +38,7 @@ nlohmann::json loop_json(const online::ClosedLoopResult& r) {
                       {"points_used", p.points_used}});
   return {{"passes", passes},
           {"profiles", r.profiles},
-          {"points", {{"used", r.points.used}, {"outside_target", r.points.outside}, {"not_yet_cut", r.points.not_yet_cut}, {"invalid", r.points.invalid},
+          {"points", {{"used", r.points.used}, {"used_on_stock_top", r.points.used_top}, {"outside_target", r.points.outside}, {"not_yet_cut", r.points.not_yet_cut}, {"invalid", r.points.invalid},
                       {"out_of_range", r.points.out_of_range}}},
           {"learned_at_program_time_s", r.learned_at},
           {"calibration_bias", {{"sampled_points", r.calibration.points}, {"rms_bias_mm", r.calibration.rms_bias},

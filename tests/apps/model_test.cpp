@@ -112,6 +112,33 @@ TEST_F(ModelOnARealDatabase, ReduceMeetsItsBoundAndIsSmallerThanTheDatabase) {
   const auto model = drom::reduce::LightModel::read(out / "model.h5");
   EXPECT_EQ(model.rank(), s["rank"].get<int>());
   EXPECT_GT(model.rank(), 0);
+  EXPECT_FALSE(model.has_top());  // not asked for
+  // The prior's mean is the case's own [stress] profile: its history is the database's B1 c.
+  const drom::Hdf5Reader h5(db);
+  const Eigen::MatrixXd B1 = as_matrix(h5.matrix("B1"));
+  const Eigen::VectorXd times = as_matrix(h5.matrix("station_time"));
+  const Eigen::VectorXd c = (Eigen::VectorXd(6) << -60, 30, -15, -40, 20, -10).finished();
+  ASSERT_EQ(model.prior_mean.size(), model.rank());
+  const Eigen::Index nodes = model.target.node_count();
+  double mean_error = 0;
+  for (Eigen::Index st = 0; st < times.size(); ++st) {
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(nodes);
+    for (int k = 0; k < model.rank(); ++k) w += model.prior_mean[k] * model.histories[static_cast<std::size_t>(k)].at(times[st]);
+    mean_error = std::max(mean_error, (w - B1.middleRows(st * nodes, nodes) * c).cwiseAbs().maxCoeff());
+  }
+  std::printf("prior mean: its history against B1 c (the case's profile) %.3g mm (bound %.3g mm)\n", mean_error, model.error_bound());
+  EXPECT_LE(mean_error, model.error_bound());
+
+  // With the stock's top: kept within the margin, its measured error where it still stands.
+  ASSERT_EQ(run("reduce " + db.string() + " --tol 1e-3 --top-margin 100 --out " + (out / "with_top.h5").string()), "");
+  const auto top = drom::reduce::LightModel::read(out / "with_top.h5");
+  ASSERT_TRUE(top.has_top());
+  EXPECT_EQ(static_cast<int>(top.top_histories.size()), top.rank());
+  EXPECT_GE(top.top.nodes().row(0).minCoeff(), 100.0 - 1e-9);  // the pocket starts at 200
+  EXPECT_LE(top.top.nodes().row(0).maxCoeff(), 900.0 + 1e-9);
+  EXPECT_GT(top.top_error_bound, 0);
+  EXPECT_LT(top.top_error_bound, 1e-3);
+  std::printf("with the top (100 mm margin): %d top nodes, measured error %.3g mm where it stands\n", top.top.node_count(), top.top_error_bound);
   // The pictures: the target surface with one history per mode, the final surface with one vector each.
   for (const char* name : {"target_modes.vtu", "final_shape_modes.vtu"}) {
     vtkNew<vtkXMLUnstructuredGridReader> reader;

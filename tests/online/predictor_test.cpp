@@ -5,6 +5,7 @@
 #include "tests/online/exact_reading.hpp"
 #include "tests/reduce/synthetic_model.hpp"
 
+#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -99,8 +100,10 @@ TEST(Predictor, RecoversAProfileInsideTheBasisAndItsFinalShape) {
 TEST(Predictor, NinetyFivePercentBandCoversTheTruthAtNinetyFivePercentOfNodes) {
   // Check 4: 200 runs, each with coefficients drawn from the prior and N(0, 0.05) noise; the final
   // shape's 95 % band (1.96 sd) must cover the truth at 95 +- 3 % of the (run, node) pairs. Few
-  // profiles (the first two passes) so that the band is wide and the prior matters.
-  const reduce::LightModel m = test::synthetic_model();
+  // profiles (the first two passes) so that the band is wide and the prior matters. The prior has a
+  // mean of its own (a case's expected profile), and the draws are around it.
+  reduce::LightModel m = test::synthetic_model();
+  m.prior_mean = (Eigen::VectorXd(4) << 0.5, -1.0, 0.3, 0.8).finished();
   std::mt19937 rng(2024);
   std::normal_distribution<double> gauss(0, 1);
   long long covered = 0, total = 0;
@@ -110,7 +113,7 @@ TEST(Predictor, NinetyFivePercentBandCoversTheTruthAtNinetyFivePercentOfNodes) {
     if (t < 45 && static_cast<int>(t) % 4 == 1) times.push_back(t);
   for (int run = 0; run < 200; ++run) {
     Eigen::VectorXd alpha(m.rank());
-    for (int k = 0; k < m.rank(); ++k) alpha[k] = m.prior_sd[k] * gauss(rng);
+    for (int k = 0; k < m.rank(); ++k) alpha[k] = m.prior_mean[k] + m.prior_sd[k] * gauss(rng);
     online::Predictor predictor(m, {});
     for (double t : times) predictor.add_profile(t, {tool_at(m, t), 0.0}, profile(m, alpha, t, 0.05, rng, no_offset));
     const online::FinalShape shape = predictor.final_shape();
@@ -124,6 +127,15 @@ TEST(Predictor, NinetyFivePercentBandCoversTheTruthAtNinetyFivePercentOfNodes) {
   const double coverage = static_cast<double>(covered) / static_cast<double>(total);
   std::printf("coverage of the 95 %% band: %.2f %% of %lld (run, node) pairs; mean sd %.4f mm\n", 100 * coverage, total, mean_sd / static_cast<double>(total));
   EXPECT_NEAR(coverage, 0.95, 0.03);
+}
+
+TEST(Predictor, WithoutReadingsTheEstimateIsThePriorMean) {
+  reduce::LightModel m = test::synthetic_model();
+  m.prior_mean = (Eigen::VectorXd(4) << 0.5, -1.0, 0.3, 0.8).finished();
+  const online::Predictor predictor(m, {});
+  const online::Estimate e = predictor.estimate();
+  EXPECT_LT((e.alpha - m.prior_mean).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_LT((e.covariance.diagonal().cwiseSqrt() - m.prior_sd).cwiseAbs().maxCoeff(), 1e-12);
 }
 
 TEST(Predictor, DropsAndCountsWhatIsNotTheMachinedSurface) {
@@ -227,4 +239,105 @@ TEST(Predictor, IngestAndOffsetQueriesRunConcurrently) {
   done = true;
   control.join();
   EXPECT_LT((sequential.estimate().alpha - concurrent.estimate().alpha).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+namespace {
+
+// The stock's top where the tool has not been: its nominal altitude plus w_top, from the top's own
+// histories interpolated on the top's faces; NaN where the tool has reached any node of the face
+// (the material there is being cut) or off the top.
+double top_reading(const reduce::LightModel& m, const Eigen::VectorXd& alpha, double x, double y, double t) {
+  const auto p = m.top.locate(x, y);
+  if (!p) return std::nan("");
+  double z = m.top.nominal_altitude(*p);
+  for (int q = 0; q < p->count; ++q) {
+    const int node = p->nodes[static_cast<std::size_t>(q)];
+    if (m.top_cut_time[node] <= t) return std::nan("");
+    for (int k = 0; k < m.rank(); ++k) z += alpha[k] * p->weights[static_cast<std::size_t>(q)] * m.top_histories[static_cast<std::size_t>(k)].at(node, t);
+  }
+  return z;
+}
+
+// A profile as the sensor sees it with the top: the floor where the tool cut, the top elsewhere.
+std::vector<MeasuredPoint> profile_with_top(const reduce::LightModel& m, const Eigen::VectorXd& alpha, double t, double noise, std::mt19937& rng) {
+  std::vector<MeasuredPoint> pts = profile(m, alpha, t, noise, rng, no_offset);
+  std::normal_distribution<double> gauss(0, noise);
+  for (auto& p : pts)
+    if (std::isnan(p.z)) {
+      const double z = top_reading(m, alpha, p.x, p.y, t);
+      p.z = std::isnan(z) ? z : z + (noise > 0 ? gauss(rng) : 0);
+    }
+  return pts;
+}
+
+}  // namespace
+
+TEST(Predictor, ReadsTheStockTopAsAnAbsoluteMeasurement) {
+  // Noise-free readings of the unmachined top alone (the rim and ahead of the cut, no floor): the
+  // top's w is sum alpha_k U1_top_k, so alpha is recovered as from the floor.
+  reduce::LightModel m = test::synthetic_model();
+  test::add_synthetic_top(m);
+  online::PredictorSettings s;
+  s.prior_scale = 1e6;
+  online::Predictor predictor(m, s);
+  const Eigen::VectorXd alpha = (Eigen::VectorXd(4) << 0.8, -1.3, 0.4, 2.1).finished();
+  int used = 0, used_top = 0;
+  for (double t : profile_times()) {
+    const Eigen::Vector3d tool = tool_at(m, t);
+    std::vector<MeasuredPoint> pts;
+    for (int i = 0; i < 400; ++i) {
+      const double x = tool.x() + 30, y = -15 + 130.0 * i / 399;  // ahead of the tool, across the part
+      pts.push_back({x, y, top_reading(m, alpha, x, y, t)});
+    }
+    const auto r = predictor.add_profile(t, {tool, 0.0}, pts);
+    used += r.used, used_top += r.used_top;
+  }
+  const double alpha_error = (predictor.estimate().alpha - alpha).cwiseAbs().maxCoeff() / alpha.cwiseAbs().maxCoeff();
+  std::printf("top alone: %d points used, alpha error %.2e (relative)\n", used, alpha_error);
+  EXPECT_GT(used, 5000);
+  EXPECT_EQ(used_top, used);
+  EXPECT_LT(alpha_error, 1e-8);
+
+  // Readings of the top where the tool has been are not taken for the top (nor the floor: off it).
+  online::Predictor fresh(m, s);
+  const double t = 10;
+  const Eigen::Vector3d tool = tool_at(m, t);
+  const std::vector<MeasuredPoint> pts = {{tool.x() - 20, -10, 10.0},   // the rim beside a cut strip: a face the tool reached
+                                          {tool.x() + 40, 60, 10.0},    // uncut top over the pocket
+                                          {210, 110, 10.0}};            // the rim, never cut
+  const auto r = fresh.add_profile(t, {tool, 0.0}, pts);
+  EXPECT_EQ(r.used_top, 2);
+  EXPECT_EQ(r.outside, 1);
+}
+
+TEST(Predictor, TheStockTopNarrowsTheEstimate) {
+  // The same noisy profiles, floor and top, fitted with and without the top: the top's absolute
+  // readings must shrink the posterior (the final shape's sd) and the estimate must stay within it.
+  reduce::LightModel m = test::synthetic_model();
+  test::add_synthetic_top(m);
+  const Eigen::VectorXd alpha = (Eigen::VectorXd(4) << 0.8, -1.3, 0.4, 2.1).finished();
+  std::mt19937 rng(7);
+  std::vector<double> times;
+  for (double t : profile_times())
+    if (t < 45) times.push_back(t);  // two passes: the floor alone says little yet
+  std::vector<std::vector<MeasuredPoint>> profiles;
+  for (double t : times) profiles.push_back(profile_with_top(m, alpha, t, 0.05, rng));
+  online::PredictorSettings with, without;
+  without.use_stock_top = false;
+  online::Predictor a(m, with), b(m, without);
+  for (std::size_t i = 0; i < times.size(); ++i) {
+    a.add_profile(times[i], {tool_at(m, times[i]), 0.0}, profiles[i]);
+    b.add_profile(times[i], {tool_at(m, times[i]), 0.0}, profiles[i]);
+  }
+  const online::FinalShape sa = a.final_shape(), sb = b.final_shape();
+  const double sd_with = sa.sd.row(2).maxCoeff(), sd_without = sb.sd.row(2).maxCoeff();
+  const Eigen::VectorXd truth = m.final_basis * alpha;
+  double worst_z = 0;
+  for (Eigen::Index n = 0; n < sa.nodes.cols(); ++n) worst_z = std::max(worst_z, std::abs(sa.displacement(2, n) - truth[3 * n + 2]) / sa.sd(2, n));
+  const online::Estimate e = a.estimate();
+  const double mahalanobis2 = (e.alpha - alpha).dot(e.covariance.ldlt().solve(e.alpha - alpha));
+  std::printf("final shape sd: %.2e mm with the top, %.2e mm without; worst node %.2f sd off; alpha Mahalanobis^2 %.2f (4 dof)\n", sd_with, sd_without, worst_z,
+              mahalanobis2);
+  EXPECT_LT(sd_with, 0.5 * sd_without);
+  EXPECT_LT(mahalanobis2, 18.5);  // chi-square, 4 dof: exceeded with probability 1e-3
 }

@@ -32,6 +32,24 @@ TEST(LightModel, RoundTripsThroughItsHdf5File) {
   EXPECT_EQ(back.prior_sd, m.prior_sd);
   EXPECT_EQ(back.case_toml, m.case_toml);
   EXPECT_EQ(back.tool_radius, m.tool_radius);
+  EXPECT_FALSE(back.has_top());
+  std::filesystem::remove(file);
+}
+
+TEST(LightModel, RoundTripsTheStockTop) {
+  reduce::LightModel m = test::synthetic_model();
+  test::add_synthetic_top(m);
+  m.top_history_bound = 1e-5, m.top_error_bound = 2e-5;
+  const auto file = std::filesystem::temp_directory_path() / "drom_light_model_top_test.h5";
+  m.write(file);
+  const reduce::LightModel back = reduce::LightModel::read(file);
+  ASSERT_TRUE(back.has_top());
+  EXPECT_EQ(back.top.node_count(), m.top.node_count());
+  EXPECT_EQ(back.top.faces(), m.top.faces());
+  EXPECT_EQ(back.top_cut_time, m.top_cut_time);
+  EXPECT_EQ(back.top_error_bound, 2e-5);
+  for (int k = 0; k < m.rank(); ++k)
+    EXPECT_NEAR(back.top_histories[static_cast<std::size_t>(k)].at(40, 71.2), m.top_histories[static_cast<std::size_t>(k)].at(40, 71.2), 1e-8);
   std::filesystem::remove(file);
 }
 

@@ -94,4 +94,53 @@ inline reduce::LightModel synthetic_model(double tool_radius = 12.5, reduce::Too
   return m;
 }
 
+// The stock's top for the synthetic model: 12 x 7 Quad9 faces over [-20, 220] x [-20, 120] at z = 10
+// (the floor's footprint and a rim around it), histories of the same shapes as the floor's plus a
+// twist of their own (the top is not the floor), and each node's cut time from the same passes.
+inline void add_synthetic_top(reduce::LightModel& m) {
+  const int ex = 12, ey = 7, nx = 2 * ex + 1, ny = 2 * ey + 1;
+  const double x0 = -20, y0 = -20, lx = 240, ly = 140, top_z = 10;
+  auto id = [&](int i, int j) { return j * nx + i; };
+  Eigen::Matrix3Xd nodes(3, nx * ny);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) nodes.col(id(i, j)) = Eigen::Vector3d(x0 + lx * i / (nx - 1), y0 + ly * j / (ny - 1), top_z);
+  std::vector<int> faces;
+  for (int b = 0; b < ey; ++b)
+    for (int a = 0; a < ex; ++a) {
+      const int i = 2 * a, j = 2 * b;
+      for (int v : {id(i, j), id(i + 2, j), id(i + 2, j + 2), id(i, j + 2), id(i + 1, j), id(i + 2, j + 1), id(i + 1, j + 2), id(i, j + 1), id(i + 1, j + 1)})
+        faces.push_back(v);
+    }
+  m.top = reduce::SurfaceMesh(nodes, faces, 9);
+  // Cut: the first pass (a segment y = const, x from 0 to 200 at 10 mm/s) whose disc reaches the node.
+  const double R = m.tool_radius, feed = 10, cycle = 25;
+  m.top_cut_time.resize(nodes.cols());
+  for (Eigen::Index n = 0; n < nodes.cols(); ++n) {
+    m.top_cut_time[n] = std::numeric_limits<double>::infinity();
+    for (int p = 0; p < 5; ++p) {
+      const double dy = nodes(1, n) - (10 + 20 * p);
+      if (std::abs(dy) > R) continue;
+      const double half = std::sqrt(R * R - dy * dy);
+      if (nodes(0, n) - half > 200 || nodes(0, n) + half < 0) continue;
+      m.top_cut_time[n] = p * cycle + std::max(0.0, nodes(0, n) - half) / feed;
+      break;
+    }
+  }
+  const Eigen::VectorXd& times = m.histories.front().times();
+  const double end = 5 * cycle;
+  m.top_histories.clear();
+  for (int k = 0; k < m.rank(); ++k) {
+    Eigen::MatrixXd H(nodes.cols(), times.size() - 1);  // the stored instants after the leading start
+    for (Eigen::Index s = 1; s < times.size(); ++s) {
+      const double tau = times[s] / end;
+      for (Eigen::Index n = 0; n < nodes.cols(); ++n) {
+        const double x = nodes(0, n) / 200, y = nodes(1, n) / 100;
+        const double u = k == 0 ? x * x * tau : k == 1 ? std::sin(M_PI * x) * std::sin(M_PI * y) * tau * tau : k == 2 ? (x - 0.5) * (y - 0.3) * std::sqrt(tau) : std::cos(2 * M_PI * x) * y * tau * (1 - 0.5 * tau);
+        H(n, s - 1) = 0.05 * (u + 0.2 * (k + 1) * x * y * tau);
+      }
+    }
+    m.top_histories.emplace_back(H, times.tail(times.size() - 1), 1e-13, 0.0);
+  }
+}
+
 }  // namespace drom::test
