@@ -222,6 +222,7 @@ void read_closed_loop(CaseReader& r, Case& c) {
     if (o.find('=') == std::string::npos) r.fail("run.quick", "expected \"key=value\" overrides, got '" + o + "'");
   c.path_tolerance = r.real("run.path_tolerance", Range::positive(), c.path_tolerance);
   c.shape_tolerance = r.real("run.shape_tolerance", Range::positive(), c.shape_tolerance);
+  c.shape_pass = static_cast<int>(r.integer("run.shape_pass", 1, 100000, c.shape_pass));
   if (r.has("run.shape_vtk_passes"))
     for (double v : r.reals("run.shape_vtk_passes", Range::closed(1, 100000))) {
       if (v != std::floor(v)) r.fail("run.shape_vtk_passes", "expected pass numbers (whole numbers from 1)");

@@ -109,6 +109,7 @@ struct Case {
   std::string run_scale = "quick";               // quick: apply run.quick first; seed: the case as written
   std::vector<std::string> run_quick;            // "key=value" overrides for a run of a few minutes
   double path_tolerance = 1e-3, shape_tolerance = 0.02;  // mm: the headline targets
+  int shape_pass = 3;                                    // the final-shape target applies from the end of this pass
   std::vector<int> shape_vtk_passes;             // passes whose final-shape predictions go to VTK
 };
 

@@ -16,14 +16,16 @@ nlohmann::json Headline::to_json() const {
           {"path_error_uncorrected_max_mm", uncorrected_max},
           {"path_error_corrected_max_from_pass3_mm", corrected_max_from_3},
           {"path_error_corrected_mean_from_pass3_mm", corrected_mean_from_3},
-          {"final_shape_max_error_end_of_pass3_mm", shape_error_pass3},
+          {"final_shape_target_pass", shape_pass},
+          {"final_shape_max_error_end_of_target_pass_mm", shape_error_at_pass},
           {"final_shape_max_error_end_mm", shape_error_end},
           {"final_shape_rms_error_end_mm", shape_rms_end},
           {"final_shape_band95_coverage_end", band_coverage_end}};
 }
 
-Headline headline(const online::ClosedLoopResult& corrected, const online::ClosedLoopResult& uncorrected) {
+Headline headline(const online::ClosedLoopResult& corrected, const online::ClosedLoopResult& uncorrected, int shape_pass) {
   Headline h;
+  h.shape_pass = shape_pass;
   h.learned_at = corrected.learned_at;
   for (const auto& p : corrected.passes)
     if (h.learned_at >= 0 && h.learned_at <= p.end) {
@@ -39,7 +41,8 @@ Headline headline(const online::ClosedLoopResult& corrected, const online::Close
       sum += p.mean_abs_error * p.samples, n += p.samples;
     }
   h.corrected_mean_from_3 = n > 0 ? sum / static_cast<double>(n) : 0;
-  if (corrected.passes.size() >= 3) h.shape_error_pass3 = corrected.passes[2].shape_max_error;
+  if (shape_pass >= 1 && corrected.passes.size() >= static_cast<std::size_t>(shape_pass))
+    h.shape_error_at_pass = corrected.passes[static_cast<std::size_t>(shape_pass - 1)].shape_max_error;
   if (!corrected.passes.empty()) {
     h.shape_error_end = corrected.passes.back().shape_max_error;
     h.shape_rms_end = corrected.passes.back().shape_rms_error;

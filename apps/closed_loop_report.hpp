@@ -17,12 +17,13 @@ struct Headline {
   double uncorrected_max = 0;      // mm, over all passes
   double corrected_max_from_3 = 0; // mm, path error from pass 3 on (with correction)
   double corrected_mean_from_3 = 0;
-  double shape_error_pass3 = 0;    // mm, final-shape max error at the end of pass 3
+  int shape_pass = 3;              // the pass whose end the final-shape target looks at
+  double shape_error_at_pass = 0;  // mm, final-shape max error at the end of shape_pass
   double shape_error_end = 0, shape_rms_end = 0, band_coverage_end = 0;
   nlohmann::json to_json() const;
 };
 
-Headline headline(const online::ClosedLoopResult& corrected, const online::ClosedLoopResult& uncorrected);
+Headline headline(const online::ClosedLoopResult& corrected, const online::ClosedLoopResult& uncorrected, int shape_pass);
 
 // Writes passes.csv/.png, path_samples.csv, final_shape_error.csv/.png, final_shape_pass_<k>.vtu
 // (+ .pvd), offsets.csv and corrected_program.nc into `out`. Returns the files written.

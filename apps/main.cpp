@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
   };
   const Sub subs[] = {
       {"run", "the closed loop on a case (default: the embedded flat-plate case): offline, model, truth, corrected machining", drom::app::run_command},
-      {"study", "sweep one closed-loop parameter (noise, angle, refresh, calibration, desync, amplitude) and tabulate the headline errors",
+      {"study", "sweep one closed-loop parameter (noise, angle, refresh, calibration, desync, amplitude, seed) and tabulate the headline errors",
        drom::app::study_command},
       {"layer", "the FE core on uniform layer removal, against the closed form", drom::app::layer_command},
       {"removal", "compute the material each tool station removes, on the case's mesh", drom::app::removal_command},
@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
     cmd->add_option("--out", options.out, reduce ? "model file (.h5), or a folder for model.h5" : "output folder")->capture_default_str();
     cmd->add_flag("--quiet", options.quiet, "no progress or table, only files");
     if (std::string(sub.name) == "study") {
-      cmd->add_option("--param", options.study_parameter, "the parameter: noise, angle, refresh, calibration, desync or amplitude")->required();
+      cmd->add_option("--param", options.study_parameter, "the parameter: noise, angle, refresh, calibration, desync, amplitude or seed (the noise draw)")->required();
       cmd->add_option("--values", options.study_values, "its values, e.g. --values 0,0.02,0.05")->required()->delimiter(',');
     }
     if (std::string(sub.name) == "offline" || std::string(sub.name) == "truth") {

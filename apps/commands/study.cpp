@@ -37,6 +37,7 @@ const std::map<std::string, Parameter>& parameters() {
       {"calibration", {"sensor offset error along the feed (mm)", [](Case& c, double v) { c.sensor_offset_error[0] = v; }}},
       {"desync", {"synchronization delay (s)", [](Case& c, double v) { c.desync = v; }}},
       {"amplitude", {"stress amplitude (x the truth's)", [](Case&, double) {}}},
+      {"seed", {"sensor noise draw (seed)", [](Case& c, double v) { c.sensor_seed = static_cast<std::uint32_t>(v); }}},
   };
   return p;
 }
@@ -58,9 +59,9 @@ int study_command(const CommandOptions& options) {
   const ClosedLoopInputs in = prepare_closed_loop(base, options);
 
   std::string csv = options.study_parameter +
-                    ",learned_at_s,learned_pass,uncorrected_max_mm,corrected_max_from_pass3_mm,corrected_mean_from_pass3_mm,final_shape_error_pass3_mm,"
+                    ",learned_at_s,learned_pass,uncorrected_max_mm,corrected_max_from_pass3_mm,corrected_mean_from_pass3_mm,final_shape_error_target_pass_mm,"
                     "final_shape_error_end_mm,band95_coverage_end,calibration_rms_bias_mm,calibration_rms_slope_times_offset_mm\n";
-  PlotSeries path{"path error with correction, max from pass 3", {}, {}, "o-"}, shape3{"final-shape error, end of pass 3", {}, {}, "s-"},
+  PlotSeries path{"path error with correction, max from pass 3", {}, {}, "o-"}, shape3{"final-shape error, end of pass " + std::to_string(base.shape_pass), {}, {}, "s-"},
       shape_end{"final-shape error, end", {}, {}, "^-"}, open_loop{"path error without correction, max", {}, {}, "x--"};
   nlohmann::json rows = nlohmann::json::array();
   for (const double value : options.study_values) {
@@ -76,14 +77,14 @@ int study_command(const CommandOptions& options) {
     std::thread side([&] { uncorrected = uncorrected_loop.run(b.part); });
     corrected = corrected_loop.run(a.part);
     side.join();
-    const Headline h = headline(corrected, uncorrected);
+    const Headline h = headline(corrected, uncorrected, c.shape_pass);
     char line[512];
     std::snprintf(line, sizeof line, "%.6g,%.3f,%d,%.6e,%.6e,%.6e,%.6e,%.6e,%.4f,%.6e,%.6e\n", value, h.learned_at, h.learned_pass, h.uncorrected_max,
-                  h.corrected_max_from_3, h.corrected_mean_from_3, h.shape_error_pass3, h.shape_error_end, h.band_coverage_end, corrected.calibration.rms_bias,
+                  h.corrected_max_from_3, h.corrected_mean_from_3, h.shape_error_at_pass, h.shape_error_end, h.band_coverage_end, corrected.calibration.rms_bias,
                   corrected.calibration.rms_slope_times_offset);
     csv += line;
     path.x.push_back(value), path.y.push_back(std::max(h.corrected_max_from_3, 1e-7));
-    shape3.x.push_back(value), shape3.y.push_back(std::max(h.shape_error_pass3, 1e-7));
+    shape3.x.push_back(value), shape3.y.push_back(std::max(h.shape_error_at_pass, 1e-7));
     shape_end.x.push_back(value), shape_end.y.push_back(std::max(h.shape_error_end, 1e-7));
     open_loop.x.push_back(value), open_loop.y.push_back(h.uncorrected_max);
     nlohmann::json row = h.to_json();
@@ -93,7 +94,7 @@ int study_command(const CommandOptions& options) {
     rows.push_back(row);
     if (!options.quiet)
       std::fprintf(stderr, "drom study: %s = %g: path error from pass 3 %.2e mm, final shape at pass 3 %.4f mm, at the end %.4f mm\n", options.study_parameter.c_str(),
-                   value, h.corrected_max_from_3, h.shape_error_pass3, h.shape_error_end);
+                   value, h.corrected_max_from_3, h.shape_error_at_pass, h.shape_error_end);
   }
   write_file_atomically(options.out / "study.csv", csv);
   std::vector<std::string> files = {"study.csv"};
@@ -117,10 +118,10 @@ int study_command(const CommandOptions& options) {
                               {"files", files}});
   if (!options.quiet) {
     std::printf("drom study: %s, %s\n", base.name.c_str(), parameter.label);
-    std::printf("  %12s  %14s  %14s  %14s  %14s\n", options.study_parameter.c_str(), "uncorr. max", "corr. max p3+", "shape p3", "shape end");
+    std::printf("  %12s  %14s  %14s  %14s  %14s\n", options.study_parameter.c_str(), "uncorr. max", "corr. max p3+", ("shape p" + std::to_string(base.shape_pass)).c_str(), "shape end");
     for (const auto& r : rows)
       std::printf("  %12.6g  %14.3e  %14.3e  %14.4f  %14.4f\n", r["value"].get<double>(), r["path_error_uncorrected_max_mm"].get<double>(),
-                  r["path_error_corrected_max_from_pass3_mm"].get<double>(), r["final_shape_max_error_end_of_pass3_mm"].get<double>(),
+                  r["path_error_corrected_max_from_pass3_mm"].get<double>(), r["final_shape_max_error_end_of_target_pass_mm"].get<double>(),
                   r["final_shape_max_error_end_mm"].get<double>());
     std::printf("  outputs in %s: study.csv, study.png, summary.json\n", options.out.string().c_str());
   }

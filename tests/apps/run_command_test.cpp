@@ -41,9 +41,9 @@ void check_run(const std::string& name, const std::string& args, const Stored& s
   EXPECT_NE(r.output.find("path error with correction, max from pass 3"), std::string::npos) << r.output;  // the printed table
   const auto s = summary(out);
   const auto& h = s["headline"];
-  std::printf("%s: uncorrected max %.5f mm, learned in pass %d, corrected max from pass 3 %.3e mm, final shape at the end %.4f mm (pass 3: %.4f)\n", name.c_str(),
+  std::printf("%s: uncorrected max %.5f mm, learned in pass %d, corrected max from pass 3 %.3e mm, final shape at the end %.4f mm (target pass: %.4f)\n", name.c_str(),
               h["path_error_uncorrected_max_mm"].get<double>(), h["learned_during_pass"].get<int>(), h["path_error_corrected_max_from_pass3_mm"].get<double>(),
-              h["final_shape_max_error_end_mm"].get<double>(), h["final_shape_max_error_end_of_pass3_mm"].get<double>());
+              h["final_shape_max_error_end_mm"].get<double>(), h["final_shape_max_error_end_of_target_pass_mm"].get<double>());
   // The truth's distortion is physics: tight. What the loop achieves depends on the noise draws and
   // the fit: a factor.
   EXPECT_NEAR(h["path_error_uncorrected_max_mm"].get<double>(), stored.uncorrected_max, 0.02 * stored.uncorrected_max);

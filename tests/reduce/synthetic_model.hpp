@@ -11,13 +11,13 @@
 
 namespace drom::test {
 
-inline reduce::LightModel synthetic_model(double tool_radius = 12.5, reduce::ToolShape shape = reduce::ToolShape::Flat) {
-  const int ex = 10, ey = 5, nx = 2 * ex + 1, ny = 2 * ey + 1;
-  const double lx = 200, ly = 100, floor_z = 8;
+// A flat ex x ey grid of Quad9 faces over [x0, x0 + lx] x [y0, y0 + ly] at height z.
+inline reduce::SurfaceMesh quad9_grid(int ex, int ey, double x0, double y0, double lx, double ly, double z) {
+  const int nx = 2 * ex + 1, ny = 2 * ey + 1;
   auto id = [&](int i, int j) { return j * nx + i; };
   Eigen::Matrix3Xd nodes(3, nx * ny);
   for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) nodes.col(id(i, j)) = Eigen::Vector3d(lx * i / (nx - 1), ly * j / (ny - 1), floor_z);
+    for (int i = 0; i < nx; ++i) nodes.col(id(i, j)) = Eigen::Vector3d(x0 + lx * i / (nx - 1), y0 + ly * j / (ny - 1), z);
   std::vector<int> faces;
   for (int b = 0; b < ey; ++b)
     for (int a = 0; a < ex; ++a) {
@@ -25,8 +25,15 @@ inline reduce::LightModel synthetic_model(double tool_radius = 12.5, reduce::Too
       for (int v : {id(i, j), id(i + 2, j), id(i + 2, j + 2), id(i, j + 2), id(i + 1, j), id(i + 2, j + 1), id(i + 1, j + 2), id(i, j + 1), id(i + 1, j + 1)})
         faces.push_back(v);
     }
+  return reduce::SurfaceMesh(nodes, faces, 9);
+}
+
+inline reduce::LightModel synthetic_model(double tool_radius = 12.5, reduce::ToolShape shape = reduce::ToolShape::Flat) {
+  const double lx = 200, ly = 100, floor_z = 8;
   reduce::LightModel m;
-  m.target = reduce::SurfaceMesh(nodes, faces, 9);
+  m.target = quad9_grid(10, 5, 0, 0, lx, ly, floor_z);
+  const Eigen::Matrix3Xd nodes = m.target.nodes();
+  const std::vector<int> faces = m.target.faces();
 
   // Passes along x at y = 10, 30, ..., 90: 20 s of cutting each, 5 s of rapid return and step.
   const int passes = 5;
@@ -98,20 +105,8 @@ inline reduce::LightModel synthetic_model(double tool_radius = 12.5, reduce::Too
 // (the floor's footprint and a rim around it), histories of the same shapes as the floor's plus a
 // twist of their own (the top is not the floor), and each node's cut time from the same passes.
 inline void add_synthetic_top(reduce::LightModel& m) {
-  const int ex = 12, ey = 7, nx = 2 * ex + 1, ny = 2 * ey + 1;
-  const double x0 = -20, y0 = -20, lx = 240, ly = 140, top_z = 10;
-  auto id = [&](int i, int j) { return j * nx + i; };
-  Eigen::Matrix3Xd nodes(3, nx * ny);
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) nodes.col(id(i, j)) = Eigen::Vector3d(x0 + lx * i / (nx - 1), y0 + ly * j / (ny - 1), top_z);
-  std::vector<int> faces;
-  for (int b = 0; b < ey; ++b)
-    for (int a = 0; a < ex; ++a) {
-      const int i = 2 * a, j = 2 * b;
-      for (int v : {id(i, j), id(i + 2, j), id(i + 2, j + 2), id(i, j + 2), id(i + 1, j), id(i + 2, j + 1), id(i + 1, j + 2), id(i, j + 1), id(i + 1, j + 1)})
-        faces.push_back(v);
-    }
-  m.top = reduce::SurfaceMesh(nodes, faces, 9);
+  m.top = quad9_grid(12, 7, -20, -20, 240, 140, 10);
+  const Eigen::Matrix3Xd& nodes = m.top.nodes();
   // Cut: the first pass (a segment y = const, x from 0 to 200 at 10 mm/s) whose disc reaches the node.
   const double R = m.tool_radius, feed = 10, cycle = 25;
   m.top_cut_time.resize(nodes.cols());
