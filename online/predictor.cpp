@@ -44,6 +44,8 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
       if (h.times().size() != model_.histories.front().times().size() || h.times() != model_.histories.front().times())
         throw std::invalid_argument("predictor: the model's histories must share their instants");
   target_cache_.reset(model_.histories, n);
+  w_values_.setZero(static_cast<Eigen::Index>(n) * kSlots);
+  w_tag_.assign(static_cast<std::size_t>(n) * kSlots, {-1, -1});
   if (model_.has_top()) {
     if (static_cast<int>(model_.top_histories.size()) != r_ || model_.top_cut_time.size() != model_.top.node_count())
       throw std::invalid_argument("predictor: the model's top needs one history per mode and a cut time per node");
@@ -110,10 +112,35 @@ void Predictor::basis_at(InstantCache& cache, const reduce::SurfacePoint& p, dou
   }
 }
 
+const double* Predictor::scalar_slot(int node, Eigen::Index j, const Eigen::VectorXd& alpha) {
+  const std::size_t slot = static_cast<std::size_t>(node) * kSlots + static_cast<std::size_t>(j % kSlots);
+  if (w_tag_[slot].first != j || w_tag_[slot].second != w_generation_) {
+    w_tag_[slot] = {j, w_generation_};
+    w_values_[static_cast<Eigen::Index>(slot)] = Eigen::Map<const Eigen::VectorXd>(target_cache_.at(node, j), r_).dot(alpha);
+  }
+  return &w_values_[static_cast<Eigen::Index>(slot)];
+}
+
+double Predictor::w_at(const reduce::SurfacePoint& p, double t, const Eigen::VectorXd& alpha) {
+  if (r_ == 0) return 0;
+  const auto& instants = model_.histories.front().times();
+  const auto at = reduce::locate_time(instants, t);
+  const Eigen::Index next = at.i + (instants.size() > 1 ? 1 : 0);
+  double w = 0;
+  for (int q = 0; q < p.count; ++q) {
+    const int node = p.nodes[static_cast<std::size_t>(q)];
+    w += p.weights[static_cast<std::size_t>(q)] * ((1 - at.weight) * *scalar_slot(node, at.i, alpha) + at.weight * *scalar_slot(node, next, alpha));
+  }
+  return w;
+}
+
 void Predictor::InstantCache::reset(const std::vector<reduce::SpaceTimeField>& h, int nodes) {
-  histories = &h;
   space_by_node.clear();
-  for (const auto& f : h) space_by_node.emplace_back(f.space().transpose());  // a node's terms contiguous: one cache line, not one per term
+  time_by_instant.clear();
+  for (const auto& f : h) {
+    space_by_node.emplace_back(f.space().transpose());  // a node's terms contiguous: one cache line, not one per term
+    time_by_instant.emplace_back(f.time().transpose());  // an instant's terms contiguous too: the fill is one vectorized dot
+  }
   values.setZero(static_cast<Eigen::Index>(h.size()), static_cast<Eigen::Index>(nodes) * kSlots);
   tag.assign(static_cast<std::size_t>(nodes) * kSlots, -1);
 }
@@ -123,7 +150,7 @@ const double* Predictor::InstantCache::at(int node, Eigen::Index j) {
   double* v = values.col(static_cast<Eigen::Index>(slot)).data();
   if (tag[slot] != j) {
     tag[slot] = j;
-    for (std::size_t k = 0; k < space_by_node.size(); ++k) v[k] = space_by_node[k].col(node).dot((*histories)[k].time().row(j));
+    for (std::size_t k = 0; k < space_by_node.size(); ++k) v[k] = space_by_node[k].col(node).dot(time_by_instant[k].col(j));
   }
   return v;
 }
@@ -170,6 +197,7 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
   Eigen::Index used = 0;
   const bool use_top = settings_.use_stock_top && model_.has_top();
   auto gather = [&](const Eigen::VectorXd& alpha) {
+    ++w_generation_;
     report = ProfileReport{};
     square_error = 0;
     used = 0;
@@ -216,10 +244,7 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
       // instants, as the truth is between its stations).
       const reduce::LowestCut cut = reduce::lowest_cut(
           covers_, instants, offsets_,
-          [&](double tau) {
-            basis_at(target_cache_, *p, tau, u_.data());
-            return u_.dot(alpha);
-          },
+          [&](double tau) { return w_at(*p, tau, alpha); },
           candidates_, 1e-12);
       const double cut_offset = cut.offset, t_cut = cut.time;
       const double m = pt.z - (s0 + cut_offset);

@@ -156,8 +156,8 @@ class Predictor {
   // time interval, and the cut times of the two or three passes under the sheet).
   static constexpr int kSlots = 32;
   struct InstantCache {
-    const std::vector<reduce::SpaceTimeField>* histories = nullptr;
     std::vector<Eigen::MatrixXd> space_by_node;  // per mode: its space factors, terms x nodes
+    std::vector<Eigen::MatrixXd> time_by_instant;  // and its time factors, terms x instants
     Eigen::MatrixXd values;                      // r x (nodes * kSlots)
     std::vector<Eigen::Index> tag;               // the instant each slot holds (-1: none)
     void reset(const std::vector<reduce::SpaceTimeField>& h, int nodes);
@@ -168,6 +168,14 @@ class Predictor {
   std::vector<std::pair<double, double>> covers_;
   std::vector<double> candidates_;
   InstantCache target_cache_, top_cache_;
+  // w of one fit at a target node and a stored instant, U1(node, j) . alpha: the lowest-cut search
+  // compares w at many instants and needs no more than this scalar (slot j mod kSlots, tagged with
+  // the instant and the fit's generation; a new fit is a new generation).
+  const double* scalar_slot(int node, Eigen::Index j, const Eigen::VectorXd& alpha);
+  double w_at(const reduce::SurfacePoint& p, double t, const Eigen::VectorXd& alpha);
+  Eigen::VectorXd w_values_;
+  std::vector<std::pair<Eigen::Index, long long>> w_tag_;
+  long long w_generation_ = 0;
   double top_weight_ = 1;                       // sigma_floor / sigma_top: a top row's scale in the shared normal equations
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> G_;  // the profile's differenced basis, points x r
   Eigen::VectorXd m_;                           // and its readings net of the commanded altitude
