@@ -4,6 +4,7 @@
 #include "apps/case_setup.hpp"
 #include "support/atomic_file.hpp"
 #include "apps/database_matrix.hpp"
+#include "reduce/model_reduction.hpp"
 #include "support/hdf5_reader.hpp"
 #include "support/input_error.hpp"
 #include "support/resources.hpp"
@@ -129,9 +130,9 @@ ClosedLoopInputs prepare_closed_loop(const Case& c, const CommandOptions& option
       const auto node = by_position.find(key(in.model.top.nodes().col(i)));
       const auto row = node == by_position.end() ? row_of.end() : row_of.find(node->second);
       if (row == row_of.end()) throw InputError(truth_file.string() + ": a node of the model's stock top is not on the truth's top");
-      for (Eigen::Index s = 0; s < ns; ++s)
-        in.truth.top_history(i, s) = s > 0 && in.truth.station_times[s] > in.model.top_cut_time[i] ? in.truth.top_history(i, s - 1) : B1_top(s * ntop + row->second, 0);
+      for (Eigen::Index s = 0; s < ns; ++s) in.truth.top_history(i, s) = B1_top(s * ntop + row->second, 0);
     }
+    reduce::hold_after_cut(in.truth.top_history, in.truth.station_times, in.model.top_cut_time);
   }
   return in;
 }

@@ -150,14 +150,14 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
       };
       const Eigen::Vector3d believed = reckoning.position_at_program_time(t_believed);
       const auto points = scan(settings_.sheet, settings_.errors, believed, tip, read, rng);
-      // Noise-free floor heights only: the rule is about the surface the predictor fits as the floor.
-      const HeightField read_floor = [&](double x, double y) -> std::optional<double> {
-        const auto p = target.locate(x, y, hint, false);
-        if (!p) return std::nullopt;
-        hint = p->face;
-        return floor.surface(x, y, *p, w_true, t_true);
-      };
       if (calibrating && result.profiles % 10 == 0) {
+        // Noise-free floor heights only: the rule is about the surface the predictor fits as the floor.
+        const HeightField read_floor = [&](double x, double y) -> std::optional<double> {
+          const auto p = target.locate(x, y, hint, false);
+          if (!p) return std::nullopt;
+          hint = p->face;
+          return floor.surface(x, y, *p, w_true, t_true);
+        };
         LaserSheet actual = settings_.sheet;
         actual.offset += settings_.errors.offset_error;
         actual.angle_deg += settings_.errors.angle_error_deg;

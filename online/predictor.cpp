@@ -196,6 +196,22 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
   double square_error = 0;
   Eigen::Index used = 0;
   const bool use_top = settings_.use_stock_top && model_.has_top();
+  // The row in G_.row(used) and its reading m, kept unless it is not the surface the row models (a
+  // wall, the other surface, a glitch): far from what the fit expects there. Against the fit, not
+  // against the commanded altitude: late in a run the floor has moved by more than the range since
+  // it was cut, and a cut at the range would keep only the readings whose noise pulls them inside it.
+  auto keep = [&](double m, double scale, const Eigen::VectorXd& alpha) {
+    auto g = G_.row(used);
+    if (std::abs(m - g.dot(alpha)) > settings_.reading_range) {
+      ++report.out_of_range;
+      return false;
+    }
+    const double e = m - g.dot(snap->alpha);
+    square_error += e * e;
+    if (scale != 1.0) g *= scale;
+    m_[used++] = scale * m;
+    return true;
+  };
   auto gather = [&](const Eigen::VectorXd& alpha) {
     ++w_generation_;
     report = ProfileReport{};
@@ -224,19 +240,9 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
           ++(p ? report.not_yet_cut : report.outside);
           continue;
         }
-        const double m = pt.z - model_.top.nominal_altitude(*q);
-        auto g = G_.row(used);
-        basis_at(top_cache_, *q, t, g.data());
-        if (std::abs(m - g.dot(alpha)) > settings_.reading_range) {
-          ++report.out_of_range;
-          continue;
-        }
-        const double e = m - g.dot(snap->alpha);
-        square_error += e * e;
-        g *= top_weight_;  // one weight in the normal equations: the row carries sigma_floor / sigma_top
-        m_[used] = top_weight_ * m;
-        ++used;
-        ++report.used_top;
+        basis_at(top_cache_, *q, t, G_.row(used).data());
+        // One weight in the normal equations: the row carries sigma_floor / sigma_top.
+        if (keep(pt.z - model_.top.nominal_altitude(*q), top_weight_, alpha)) ++report.used_top;
         continue;
       }
       const double s0 = model_.target.nominal_altitude(*p);
@@ -246,24 +252,11 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
           covers_, instants, offsets_,
           [&](double tau) { return w_at(*p, tau, alpha); },
           candidates_, 1e-12);
-      const double cut_offset = cut.offset, t_cut = cut.time;
-      const double m = pt.z - (s0 + cut_offset);
       auto g = G_.row(used);
       basis_at(target_cache_, *p, t, g.data());
-      basis_at(target_cache_, *p, t_cut, u_.data());
+      basis_at(target_cache_, *p, cut.time, u_.data());
       g -= u_.transpose();
-      // Not the machined floor (a wall, the stock's top, a glitch) if far from what the fit expects
-      // there. Against the fit, not against the commanded altitude: late in a run the floor has moved
-      // by more than the range since it was cut, and a cut at the range would keep only the readings
-      // whose noise pulls them inside it, a bias.
-      if (std::abs(m - g.dot(alpha)) > settings_.reading_range) {
-        ++report.out_of_range;
-        continue;
-      }
-      m_[used] = m;
-      const double e = m - g.dot(snap->alpha);
-      square_error += e * e;
-      ++used;
+      keep(pt.z - (s0 + cut.offset), 1.0, alpha);
     }
   };
   const double w = 1 / (settings_.noise_sd * settings_.noise_sd);
@@ -319,13 +312,12 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
 }
 
 Estimate Predictor::estimate() const {
+  // The snapshot holds the solve of the last profile (under this lock, so the counts match it).
   std::lock_guard<std::mutex> lock(ingest_);
-  Eigen::MatrixXd precision = normal_;
-  precision += prior_precision_;
-  const Eigen::LLT<Eigen::MatrixXd> llt(precision);
+  const auto snap = snapshot();
   Estimate e;
-  e.alpha = llt.solve(rhs_ + prior_rhs_);
-  e.covariance = llt.solve(Eigen::MatrixXd::Identity(r_, r_));
+  e.alpha = snap->alpha;
+  e.covariance = snap->covariance;
   e.points = points_;
   e.profiles = profiles_;
   e.learned = learned_;

@@ -36,6 +36,51 @@ Eigen::MatrixXd get(const Hdf5Reader& h5, const std::string& name) {
   return Eigen::Map<const RowMajor>(m.data.data(), static_cast<Eigen::Index>(m.rows), static_cast<Eigen::Index>(m.cols));
 }
 
+std::vector<int> indices(const Hdf5Reader& h5, const std::string& name) {
+  const Hdf5Matrix a = h5.matrix(name);
+  return {a.data.begin(), a.data.end()};
+}
+
+// A surface the model carries over time (the target, the stock's top): `<name>_nodes`, `<name>_faces`
+// (attribute `<name>_face_nodes`), `<name>_cut_time` (-1: never cut; HDF5 readers choke less on -1
+// than on inf), and its mode histories `<histories>_<k>_space` / `_time` over `history_times`.
+void put_surface(Hdf5Writer& h5, const std::string& name, const SurfaceMesh& mesh, const Eigen::VectorXd& cut_time, const std::string& histories,
+                 const std::vector<SpaceTimeField>& modes) {
+  h5.attribute(name + "_face_nodes", static_cast<double>(mesh.nodes_per_face()));
+  put(h5, name + "_nodes", mesh.nodes().transpose());
+  h5.write(name + "_faces", as_doubles(mesh.faces()), mesh.faces().size() / static_cast<std::size_t>(std::max(1, mesh.nodes_per_face())),
+           static_cast<std::size_t>(mesh.nodes_per_face()));
+  put(h5, name + "_cut_time", cut_time.unaryExpr([](double t) { return std::isfinite(t) ? t : -1.0; }).eval());
+  for (std::size_t k = 0; k < modes.size(); ++k) {
+    put_single(h5, histories + "_" + std::to_string(k) + "_space", modes[k].space());
+    put_single(h5, histories + "_" + std::to_string(k) + "_time", modes[k].time());
+  }
+}
+
+// The same read back and checked; errors name the file through `fail`.
+template <class Fail>
+void get_surface(const Hdf5Reader& h5, const std::string& name, const std::string& histories, int rank, const Eigen::VectorXd& times, const Fail& fail,
+                 SurfaceMesh& mesh, Eigen::VectorXd& cut_time, std::vector<SpaceTimeField>& modes) {
+  try {
+    mesh = SurfaceMesh(get(h5, name + "_nodes").transpose(), indices(h5, name + "_faces"), static_cast<int>(h5.number_attribute(name + "_face_nodes")));
+  } catch (const std::invalid_argument& e) {
+    throw fail(name + " surface: " + e.what());
+  }
+  cut_time = get(h5, name + "_cut_time").unaryExpr([](double t) { return t < 0 ? std::numeric_limits<double>::infinity() : t; });
+  if (cut_time.size() != mesh.node_count()) throw fail(name + "_cut_time: one value per " + name + " node expected");
+  for (int k = 0; k < rank; ++k) {
+    const std::string field = histories + "_" + std::to_string(k);
+    Eigen::MatrixXd space = get(h5, field + "_space"), time = get(h5, field + "_time");
+    if (space.rows() != mesh.node_count()) throw fail(field + "_space: one row per " + name + " node expected");
+    if (!space.allFinite() || !time.allFinite()) throw fail(field + " holds NaN or infinite values");
+    try {
+      modes.emplace_back(std::move(space), std::move(time), times, 0.0);
+    } catch (const std::invalid_argument& e) {
+      throw fail(field + ": " + e.what());
+    }
+  }
+}
+
 }  // namespace
 
 void LightModel::write(const std::filesystem::path& file) const {
@@ -58,40 +103,18 @@ void LightModel::write(const std::filesystem::path& file) const {
   h5.attribute("tool_shape", std::string(tool_shape == ToolShape::Ball ? "ball" : "flat"));
   h5.attribute("tool_radius_mm", tool_radius);
   h5.attribute("pocket_depth_mm", pocket_depth);
-  h5.attribute("target_face_nodes", static_cast<double>(target.nodes_per_face()));
   h5.attribute("shape_face_nodes", static_cast<double>(shape_face_nodes));
-  put(h5, "target_nodes", target.nodes().transpose());
-  h5.write("target_faces", as_doubles(target.faces()), target.faces().size() / static_cast<std::size_t>(std::max(1, target.nodes_per_face())),
-           static_cast<std::size_t>(target.nodes_per_face()));
-  Eigen::VectorXd cut = target_cut_time;
-  for (auto& t : cut)
-    if (!std::isfinite(t)) t = -1;  // HDF5 readers choke less on -1 than on inf: never cut
-  put(h5, "target_cut_time", cut);
+  put_surface(h5, "target", target, target_cut_time, "history", histories);
   put(h5, "singular_values", singular_values);
   put(h5, "right", right);
   put(h5, "prior_sd", prior_sd);
   if (prior_covariance.size() > 0) put(h5, "prior_covariance", prior_covariance);
   if (prior_mean.size() > 0) put(h5, "prior_mean", prior_mean);
   if (!histories.empty()) put(h5, "history_times", histories.front().times());
-  for (int k = 0; k < rank(); ++k) {
-    put_single(h5, "history_" + std::to_string(k) + "_space", histories[static_cast<std::size_t>(k)].space());
-    put_single(h5, "history_" + std::to_string(k) + "_time", histories[static_cast<std::size_t>(k)].time());
-  }
   if (has_top()) {
-    h5.attribute("top_face_nodes", static_cast<double>(top.nodes_per_face()));
     h5.attribute("top_history_bound_mm", top_history_bound);
     h5.attribute("top_error_bound_mm", top_error_bound);
-    put(h5, "top_nodes", top.nodes().transpose());
-    h5.write("top_faces", as_doubles(top.faces()), top.faces().size() / static_cast<std::size_t>(std::max(1, top.nodes_per_face())),
-             static_cast<std::size_t>(top.nodes_per_face()));
-    Eigen::VectorXd top_cut = top_cut_time;
-    for (auto& t : top_cut)
-      if (!std::isfinite(t)) t = -1;
-    put(h5, "top_cut_time", top_cut);
-    for (int k = 0; k < rank(); ++k) {
-      put_single(h5, "top_history_" + std::to_string(k) + "_space", top_histories[static_cast<std::size_t>(k)].space());
-      put_single(h5, "top_history_" + std::to_string(k) + "_time", top_histories[static_cast<std::size_t>(k)].time());
-    }
+    put_surface(h5, "top", top, top_cut_time, "top_history", top_histories);
   }
   put(h5, "shape_nodes", shape_nodes.transpose());
   h5.write("shape_faces", as_doubles(shape_faces), shape_faces.size() / static_cast<std::size_t>(std::max(1, shape_face_nodes)),
@@ -118,23 +141,7 @@ LightModel LightModel::read(const std::filesystem::path& file) {
   m.tool_shape = h5.text_attribute("tool_shape") == "ball" ? ToolShape::Ball : ToolShape::Flat;
   m.tool_radius = h5.number_attribute("tool_radius_mm");
   m.pocket_depth = h5.number_attribute("pocket_depth_mm");
-  const int target_face_nodes = static_cast<int>(h5.number_attribute("target_face_nodes"));
   m.shape_face_nodes = static_cast<int>(h5.number_attribute("shape_face_nodes"));
-  auto indices = [&](const std::string& name) {
-    const Hdf5Matrix a = h5.matrix(name);
-    std::vector<int> v;
-    for (double x : a.data) v.push_back(static_cast<int>(x));
-    return v;
-  };
-  try {
-    m.target = SurfaceMesh(get(h5, "target_nodes").transpose(), indices("target_faces"), target_face_nodes);
-  } catch (const std::invalid_argument& e) {
-    throw fail(std::string("target surface: ") + e.what());
-  }
-  m.target_cut_time = get(h5, "target_cut_time");
-  for (auto& t : m.target_cut_time)
-    if (t < 0) t = std::numeric_limits<double>::infinity();
-  if (m.target_cut_time.size() != m.target.node_count()) throw fail("target_cut_time: one value per target node expected");
   m.singular_values = get(h5, "singular_values");
   m.right = get(h5, "right");
   m.prior_sd = get(h5, "prior_sd");
@@ -149,49 +156,18 @@ LightModel LightModel::read(const std::filesystem::path& file) {
   }
   if (m.right.cols() != r || m.prior_sd.size() != r || m.singular_values.size() < r) throw fail("rank " + std::to_string(r) + " disagrees with right / prior_sd / singular_values");
   const Eigen::VectorXd times = r > 0 ? Eigen::VectorXd(get(h5, "history_times")) : Eigen::VectorXd();
-  for (int k = 0; k < r; ++k) {
-    const std::string name = "history_" + std::to_string(k);
-    Eigen::MatrixXd space = get(h5, name + "_space"), time = get(h5, name + "_time");
-    if (space.rows() != m.target.node_count()) throw fail(name + "_space: one row per target node expected");
-    try {
-      m.histories.emplace_back(std::move(space), std::move(time), times, 0.0);
-    } catch (const std::invalid_argument& e) {
-      throw fail(name + ": " + e.what());
-    }
-  }
+  get_surface(h5, "target", "history", r, times, fail, m.target, m.target_cut_time, m.histories);
   if (h5.has("top_nodes")) {
-    try {
-      m.top = SurfaceMesh(get(h5, "top_nodes").transpose(), indices("top_faces"), static_cast<int>(h5.number_attribute("top_face_nodes")));
-    } catch (const std::invalid_argument& e) {
-      throw fail(std::string("top surface: ") + e.what());
-    }
     m.top_history_bound = h5.number_attribute("top_history_bound_mm");
     m.top_error_bound = h5.number_attribute("top_error_bound_mm");
-    m.top_cut_time = get(h5, "top_cut_time");
-    for (auto& t : m.top_cut_time)
-      if (t < 0) t = std::numeric_limits<double>::infinity();
-    if (m.top_cut_time.size() != m.top.node_count()) throw fail("top_cut_time: one value per top node expected");
-    for (int k = 0; k < r; ++k) {
-      const std::string name = "top_history_" + std::to_string(k);
-      Eigen::MatrixXd space = get(h5, name + "_space"), time = get(h5, name + "_time");
-      if (space.rows() != m.top.node_count()) throw fail(name + "_space: one row per top node expected");
-      if (!space.allFinite() || !time.allFinite()) throw fail(name + " holds NaN or infinite values");
-      try {
-        m.top_histories.emplace_back(std::move(space), std::move(time), times, 0.0);
-      } catch (const std::invalid_argument& e) {
-        throw fail(name + ": " + e.what());
-      }
-    }
+    get_surface(h5, "top", "top_history", r, times, fail, m.top, m.top_cut_time, m.top_histories);
   }
   m.shape_nodes = get(h5, "shape_nodes").transpose();
-  m.shape_faces = indices("shape_faces");
+  m.shape_faces = indices(h5, "shape_faces");
   m.final_basis = get(h5, "final_basis");
   if (m.final_basis.rows() != 3 * m.shape_nodes.cols() || m.final_basis.cols() != r) throw fail("final_basis: (3 x shape nodes) x rank expected");
   m.path = get(h5, "path");
   if (m.path.cols() != 4) throw fail("path: 4 columns (x, y, z, program time) expected");
-  for (int k = 0; k < r; ++k)
-    if (!m.histories[static_cast<std::size_t>(k)].space().allFinite() || !m.histories[static_cast<std::size_t>(k)].time().allFinite())
-      throw fail("history " + std::to_string(k) + " holds NaN or infinite values");
   if (!m.final_basis.allFinite() || !m.prior_sd.allFinite()) throw fail("final_basis or prior_sd holds NaN or infinite values");
   return m;
 }

@@ -19,7 +19,43 @@ SpaceTimeField compressed_history(const Eigen::MatrixXd& scaled, double sigma, c
   return SpaceTimeField(space, time, field.times(), error / sigma);
 }
 
+// The r mode histories stacked in `modes` (row station * nodes + node, one column per mode), each
+// compressed with tolerance / r; `bound` gets their compression errors' sum (mm).
+std::vector<SpaceTimeField> compressed_modes(const Eigen::MatrixXd& modes, Eigen::Index nodes, const Eigen::VectorXd& sigma, const Eigen::VectorXd& times,
+                                             double tolerance, double start, int& terms, double& bound) {
+  const auto r = static_cast<int>(modes.cols());
+  std::vector<SpaceTimeField> fields;
+  bound = 0;
+  for (int k = 0; k < r; ++k) {
+    const Eigen::Map<const Eigen::MatrixXd> history(modes.col(k).data(), nodes, times.size());
+    fields.push_back(compressed_history(sigma[k] * history, sigma[k], times, tolerance / r, start, terms));
+    bound += sigma[k] * fields.back().bound();
+  }
+  return fields;
+}
+
+// Max over stations and nodes of |sum_k alpha_k U_k - database| (mm), where counts(node, station).
+template <class Counts>
+double measured_max_error(const std::vector<SpaceTimeField>& histories, const Eigen::VectorXd& times, const Eigen::MatrixXd& alpha, const Eigen::MatrixXd& scaled,
+                          Eigen::Index nodes, Counts&& counts) {
+  double error = 0;
+  for (Eigen::Index s = 0; s < times.size(); ++s) {
+    Eigen::MatrixXd at(nodes, static_cast<Eigen::Index>(histories.size()));
+    for (std::size_t k = 0; k < histories.size(); ++k) at.col(static_cast<Eigen::Index>(k)) = histories[k].at(times[s]);
+    const Eigen::MatrixXd e = at * alpha - scaled.middleRows(s * nodes, nodes);
+    for (Eigen::Index n = 0; n < nodes; ++n)
+      if (counts(n, s)) error = std::max(error, e.row(n).cwiseAbs().maxCoeff());
+  }
+  return error;
+}
+
 }  // namespace
+
+void hold_after_cut(Eigen::Ref<Eigen::MatrixXd> history, const Eigen::VectorXd& station_times, const Eigen::VectorXd& cut_time) {
+  for (Eigen::Index n = 0; n < history.rows(); ++n)
+    for (Eigen::Index s = 1; s < history.cols(); ++s)
+      if (station_times[s] > cut_time[n]) history(n, s) = history(n, s - 1);
+}
 
 ReductionReport reduce_snapshots(const SnapshotDatabase& db, const ReductionSettings& settings, LightModel& model) {
   const auto start = std::chrono::steady_clock::now();
@@ -58,14 +94,8 @@ ReductionReport reduce_snapshots(const SnapshotDatabase& db, const ReductionSett
 
   // 3. Space-time form of each history, compressed in mm (sigma_k U1_k), stored per unit U1_k.
   ReductionReport report;
-  model.histories.clear();
-  model.history_bound = 0;
-  for (int k = 0; k < r; ++k) {
-    const double sigma = pod.singular_values[k];
-    const Eigen::Map<const Eigen::MatrixXd> history(pod.modes.col(k).data(), nodes, stations);
-    model.histories.push_back(compressed_history(sigma * history, sigma, db.station_times, settings.history_tolerance / r, db.program_start, report.history_terms));
-    model.history_bound += sigma * model.histories.back().bound();
-  }
+  model.histories = compressed_modes(pod.modes.leftCols(r), nodes, pod.singular_values, db.station_times, settings.history_tolerance, db.program_start,
+                                     report.history_terms, model.history_bound);
 
   // 4. The stock's top: the same combination of its snapshots, held after each node's cut.
   model.top_histories.clear();
@@ -76,16 +106,10 @@ ReductionReport reduce_snapshots(const SnapshotDatabase& db, const ReductionSett
     if (db.B1_top.rows() != top_nodes * stations || db.B1_top.cols() != P || db.top_cut_time.size() != top_nodes)
       throw std::invalid_argument("B1_top is not (stations x top nodes) x profiles with a cut time per top node");
     top_scaled = settings.profile_scale * db.B1_top;
-    for (Eigen::Index n = 0; n < top_nodes; ++n)
-      for (Eigen::Index s = 1; s < stations; ++s)
-        if (db.station_times[s] > db.top_cut_time[n]) top_scaled.row(s * top_nodes + n) = top_scaled.row((s - 1) * top_nodes + n);
+    for (Eigen::Index p = 0; p < P; ++p) hold_after_cut(Eigen::Map<Eigen::MatrixXd>(top_scaled.col(p).data(), top_nodes, stations), db.station_times, db.top_cut_time);
     const Eigen::MatrixXd top_modes = top_scaled * pod.right.leftCols(r) * pod.singular_values.head(r).cwiseInverse().asDiagonal();  // U1_top, stacked
-    for (int k = 0; k < r; ++k) {
-      const double sigma = pod.singular_values[k];
-      const Eigen::Map<const Eigen::MatrixXd> history(top_modes.col(k).data(), top_nodes, stations);
-      model.top_histories.push_back(compressed_history(sigma * history, sigma, db.station_times, settings.history_tolerance / r, db.program_start, report.history_terms));
-      model.top_history_bound += sigma * model.top_histories.back().bound();
-    }
+    model.top_histories = compressed_modes(top_modes, top_nodes, pod.singular_values, db.station_times, settings.history_tolerance, db.program_start,
+                                           report.history_terms, model.top_history_bound);
   }
 
   // 5. Final-shape basis: alpha = D V^T c / s maps back to B2 c.
@@ -93,21 +117,12 @@ ReductionReport reduce_snapshots(const SnapshotDatabase& db, const ReductionSett
 
   // What the model gives for each database column, against the column (both in mm at profile_scale).
   const Eigen::MatrixXd alpha = pod.singular_values.head(r).asDiagonal() * pod.right.transpose();  // r x P
-  for (Eigen::Index s = 0; s < stations; ++s) {
-    Eigen::MatrixXd at(nodes, r);
-    for (int k = 0; k < r; ++k) at.col(k) = model.histories[static_cast<std::size_t>(k)].at(db.station_times[s]);
-    const Eigen::MatrixXd w = at * alpha;
-    report.measured_max_error = std::max(report.measured_max_error, (w - A.middleRows(s * nodes, nodes)).cwiseAbs().maxCoeff());
-  }
+  report.measured_max_error = measured_max_error(model.histories, db.station_times, alpha, A, nodes, [](Eigen::Index, Eigen::Index) { return true; });
   // And on the top, where the material is still there (the POD did not choose its modes for the top,
   // so this is the top's only bound: truncation and compression together).
-  for (Eigen::Index s = 0; s < stations && top_nodes > 0; ++s) {
-    Eigen::MatrixXd at(top_nodes, r);
-    for (int k = 0; k < r; ++k) at.col(k) = model.top_histories[static_cast<std::size_t>(k)].at(db.station_times[s]);
-    const Eigen::MatrixXd e = at * alpha - top_scaled.middleRows(s * top_nodes, top_nodes);
-    for (Eigen::Index n = 0; n < top_nodes; ++n)
-      if (db.station_times[s] <= db.top_cut_time[n]) report.top_measured_max_error = std::max(report.top_measured_max_error, e.row(n).cwiseAbs().maxCoeff());
-  }
+  if (top_nodes > 0)
+    report.top_measured_max_error = measured_max_error(model.top_histories, db.station_times, alpha, top_scaled, top_nodes,
+                                                       [&](Eigen::Index n, Eigen::Index s) { return db.station_times[s] <= db.top_cut_time[n]; });
   model.top_error_bound = report.top_measured_max_error;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;

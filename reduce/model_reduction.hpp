@@ -49,6 +49,11 @@ struct ReductionReport {
   double seconds = 0;
 };
 
+// A nodal history (nodes x stations) from each node's cut time on: held at its last value before the
+// cut (after it, the node's w is that of removed material). The model's top and the closed loop's
+// truth of it both follow this rule.
+void hold_after_cut(Eigen::Ref<Eigen::MatrixXd> history, const Eigen::VectorXd& station_times, const Eigen::VectorXd& cut_time);
+
 // Fills `model`'s bases, singular values, bounds and prior from the database (its surfaces, path and
 // tool come from the caller).
 ReductionReport reduce_snapshots(const SnapshotDatabase& db, const ReductionSettings& settings, LightModel& model);

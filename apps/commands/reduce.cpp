@@ -82,6 +82,21 @@ Eigen::MatrixXd path_waypoints(const levelset::Toolpath& path, const levelset::P
   return w;
 }
 
+// The surface on these mesh nodes (in this order): its faces are the element faces with every node
+// among them. `what` names it in errors.
+reduce::SurfaceMesh surface_on(const fem::Mesh& mesh, const std::vector<int>& nodes, const std::string& what, const std::filesystem::path& file) {
+  std::map<int, int> local;
+  Eigen::Matrix3Xd xyz(3, static_cast<Eigen::Index>(nodes.size()));
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (nodes[i] < 0 || nodes[i] >= mesh.node_count()) throw InputError(file.string() + ": " + what + " names a node that does not exist");
+    local[nodes[i]] = static_cast<int>(i);
+    xyz.col(static_cast<Eigen::Index>(i)) = mesh.nodes[static_cast<std::size_t>(nodes[i])];
+  }
+  const auto faces = fem::faces_within(mesh, nodes);
+  if (faces.empty()) throw InputError(file.string() + ": no element face lies on the " + what);
+  return reduce::SurfaceMesh(xyz, local_faces(faces, local), static_cast<int>(faces.front().nodes.size()));
+}
+
 }  // namespace
 
 int reduce_command(const CommandOptions& options) {
@@ -114,17 +129,9 @@ int reduce_command(const CommandOptions& options) {
   // 2. Surfaces: the target (faces on the target nodes) and the final part (boundary of what is left).
   reduce::LightModel model;
   std::vector<int> target(nt);
-  std::map<int, int> target_local;
-  Eigen::Matrix3Xd target_xyz(3, static_cast<Eigen::Index>(nt));
-  for (std::size_t i = 0; i < nt; ++i) {
-    target[i] = static_cast<int>(target_ids(static_cast<Eigen::Index>(i), 0));
-    if (target[i] < 0 || target[i] >= mesh.node_count()) throw InputError(db_path.string() + ": target_nodes names a node that does not exist");
-    target_local[target[i]] = static_cast<int>(i);
-    target_xyz.col(static_cast<Eigen::Index>(i)) = mesh.nodes[static_cast<std::size_t>(target[i])];
-  }
-  const auto target_faces = fem::faces_within(mesh, target);
-  if (target_faces.empty()) throw InputError(db_path.string() + ": no element face lies on the target surface");
-  model.target = reduce::SurfaceMesh(target_xyz, local_faces(target_faces, target_local), static_cast<int>(target_faces.front().nodes.size()));
+  for (std::size_t i = 0; i < nt; ++i) target[i] = static_cast<int>(target_ids(static_cast<Eigen::Index>(i), 0));
+  model.target = surface_on(mesh, target, "target surface (target_nodes)", db_path);
+  const Eigen::Matrix3Xd& target_xyz = model.target.nodes();
   fem::Mesh kept = mesh;
   kept.connectivity.clear();
   for (int e = 0; e < mesh.element_count(); ++e)
@@ -143,10 +150,8 @@ int reduce_command(const CommandOptions& options) {
   }
   model.shape_faces = local_faces(shape_faces, shape_local);
   model.shape_face_nodes = static_cast<int>(shape_faces.front().nodes.size());
-  // The stock's top, when the database has it (databases written before it did not).
+  // The stock's top within --top-margin of the pocket, when asked for.
   std::vector<int> top;
-  std::map<int, int> top_local;
-  Eigen::Matrix3Xd top_xyz;
   const PartModel part = build_part(c);
   if (options.top_margin >= 0) {
     if (!h5.has("B1_top")) throw InputError(db_path.string() + ": no B1_top (written before drom offline kept the stock's top); run drom offline again for --top-margin");
@@ -163,19 +168,14 @@ int reduce_command(const CommandOptions& options) {
       const Eigen::Vector3d uvt = part.shape.to_parametric(mesh.nodes[static_cast<std::size_t>(node)]);
       const double m = options.top_margin + 1e-9;
       if (uvt.x() < c.pocket_x - m || uvt.x() > c.pocket_x + c.pocket_length_x + m || uvt.y() < c.pocket_y - m || uvt.y() > c.pocket_y + c.pocket_length_y + m) continue;
-      top_local[node] = static_cast<int>(top.size());
       top.push_back(node);
       rows.push_back(i);
     }
-    top_xyz.resize(3, static_cast<Eigen::Index>(top.size()));
-    db.B1_top.resize(static_cast<Eigen::Index>(top.size()) * ns, B1_top.cols());
-    for (std::size_t j = 0; j < top.size(); ++j) {
-      top_xyz.col(static_cast<Eigen::Index>(j)) = mesh.nodes[static_cast<std::size_t>(top[j])];
-      for (Eigen::Index s = 0; s < ns; ++s) db.B1_top.row(s * static_cast<Eigen::Index>(top.size()) + static_cast<Eigen::Index>(j)) = B1_top.row(s * ntop + rows[j]);
-    }
-    const auto top_faces = fem::faces_within(mesh, top);
-    if (top_faces.empty()) throw InputError(db_path.string() + ": no element face of the stock's top lies within --top-margin of the pocket");
-    model.top = reduce::SurfaceMesh(top_xyz, local_faces(top_faces, top_local), static_cast<int>(top_faces.front().nodes.size()));
+    const auto kept_top = static_cast<Eigen::Index>(top.size());
+    db.B1_top.resize(kept_top * ns, B1_top.cols());
+    for (Eigen::Index j = 0; j < kept_top; ++j)
+      for (Eigen::Index s = 0; s < ns; ++s) db.B1_top.row(s * kept_top + j) = B1_top.row(s * ntop + rows[static_cast<std::size_t>(j)]);
+    model.top = surface_on(mesh, top, "stock's top within --top-margin of the pocket", db_path);
   }
 
   // 3. Path, tool, and when each target node was cut.
@@ -195,7 +195,7 @@ int reduce_command(const CommandOptions& options) {
   model.top_cut_time.resize(static_cast<Eigen::Index>(top.size()));
   for (std::size_t i = 0; i < top.size(); ++i)
     model.top_cut_time[static_cast<Eigen::Index>(i)] =
-        reduce::first_cover_time(model.path, cutting, top_xyz.col(static_cast<Eigen::Index>(i)) - Eigen::Vector3d(0, 0, c.pocket_depth), tool.radius, z_tolerance);
+        reduce::first_cover_time(model.path, cutting, model.top.nodes().col(static_cast<Eigen::Index>(i)) - Eigen::Vector3d(0, 0, c.pocket_depth), tool.radius, z_tolerance);
   db.top_cut_time = model.top_cut_time;
   db.program_start = 0;
 
@@ -203,27 +203,21 @@ int reduce_command(const CommandOptions& options) {
   reduce::ReductionSettings settings;
   settings.tolerance = options.tolerance;
   settings.history_tolerance = options.history_tolerance >= 0 ? options.history_tolerance : 0.5 * options.tolerance;
-  double largest = 0;
-  for (double v : c.sigma11) largest = std::max(largest, std::abs(v));
-  for (double v : c.sigma22) largest = std::max(largest, std::abs(v));
+  // The case's coefficients in the database's column order (sigma11's, then sigma22's), when they are
+  // its columns' profile.
+  Eigen::VectorXd case_coefficients(static_cast<Eigen::Index>(c.sigma11.size() + c.sigma22.size()));
+  std::copy(c.sigma11.begin(), c.sigma11.end(), case_coefficients.begin());
+  std::copy(c.sigma22.begin(), c.sigma22.end(), case_coefficients.begin() + static_cast<Eigen::Index>(c.sigma11.size()));
+  const bool case_columns = !c.sigma11.empty() && case_coefficients.size() == db.B1.cols();
+  const double largest = case_coefficients.size() > 0 ? case_coefficients.cwiseAbs().maxCoeff() : 0.0;
   settings.profile_scale = options.profile_scale > 0 ? options.profile_scale : (largest > 0 ? largest : 50.0);
   settings.max_rank = options.max_rank;
   // The prior: each unit profile's coefficient at the case's own magnitude for that direction and
   // degree (a rolled plate's stresses fall with the degree), floored at a tenth of the largest.
-  if (options.profile_scale <= 0 && !c.sigma11.empty() && static_cast<Eigen::Index>(c.sigma11.size() + c.sigma22.size()) == db.B1.cols()) {
-    settings.profile_sd.resize(db.B1.cols());
-    Eigen::Index j = 0;
-    for (double v : c.sigma11) settings.profile_sd[j++] = std::max(std::abs(v), 0.1 * settings.profile_scale);
-    for (double v : c.sigma22) settings.profile_sd[j++] = std::max(std::abs(v), 0.1 * settings.profile_scale);
-  }
+  if (options.profile_scale <= 0 && case_columns) settings.profile_sd = case_coefficients.cwiseAbs().cwiseMax(0.1 * settings.profile_scale);
   // The prior's mean: the case's own profile, the one the stock is expected to carry (a quenched
   // plate's skins are in compression, not as likely in tension: a zero mean would say they are).
-  if (options.prior_mean == "case" && static_cast<Eigen::Index>(c.sigma11.size() + c.sigma22.size()) == db.B1.cols()) {
-    settings.profile_mean.resize(db.B1.cols());
-    Eigen::Index j = 0;
-    for (double v : c.sigma11) settings.profile_mean[j++] = v;
-    for (double v : c.sigma22) settings.profile_mean[j++] = v;
-  }
+  if (options.prior_mean == "case" && case_columns) settings.profile_mean = case_coefficients;
   const auto report = reduce::reduce_snapshots(db, settings, model);
   model.case_toml = h5.text_attribute("case");
   model.database_hash = h5.text_attribute("content_hash");
