@@ -97,10 +97,17 @@ std::vector<double> profile_times(double period = 1.0) {
   return t;
 }
 
-// state.range(1): milliseconds between profiles.
+// The offset a control loop commands as it follows the floor: a smooth ramp of a few hundredths of
+// a millimetre, as the cases' corrected runs record it.
+double commanded_offset(double t) { return 0.02 * std::sin(t / 7.0) + 0.01 * std::sin(t / 2.3); }
+
+// state.range(1): milliseconds between profiles; state.range(2): the offset's refresh rate (Hz, 0: no
+// offset). The cases refresh at 100 Hz, so a cover of the 25 mm tool at 10 mm/s spans 250 offset
+// steps, all of which the lowest-cut search has to weigh.
 void AddProfile(benchmark::State& state) {
   const auto model = plate_sized_model(static_cast<int>(state.range(0)));
-  const auto times = profile_times(static_cast<double>(state.range(1)) / 1000);
+  const double period = static_cast<double>(state.range(1)) / 1000, rate = static_cast<double>(state.range(2));
+  const auto times = profile_times(period);
   std::vector<std::vector<online::MeasuredPoint>> profiles;
   for (double t : times) profiles.push_back(profile_at(t));
   auto predictor = std::make_unique<online::Predictor>(model);
@@ -113,7 +120,13 @@ void AddProfile(benchmark::State& state) {
       i = 0;
       state.ResumeTiming();
     }
-    used += predictor->add_profile(times[i], {}, profiles[i]).used;
+    if (rate > 0) {
+      // The control thread's offsets since the last profile, and the one in force at this profile.
+      state.PauseTiming();
+      for (double t = i > 0 ? times[i - 1] : 0.0; t < times[i]; t += 1 / rate) predictor->record_offset(t, commanded_offset(std::round(t * rate) / rate));
+      state.ResumeTiming();
+    }
+    used += predictor->add_profile(times[i], {{}, rate > 0 ? commanded_offset(times[i]) : 0.0}, profiles[i]).used;
     ++i;
   }
   state.counters["points_used_per_profile"] = static_cast<double>(used) / static_cast<double>(state.iterations());
@@ -142,7 +155,7 @@ void Estimate(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK(AddProfile)->ArgsProduct({{2, 5, 10, 20, 30, 40}, {100, 1000}})->ArgNames({"r", "period_ms"})->Unit(benchmark::kMicrosecond);
+BENCHMARK(AddProfile)->ArgsProduct({{2, 5, 10, 20, 30, 40}, {100, 1000}, {0, 100}})->ArgNames({"r", "period_ms", "offset_hz"})->Unit(benchmark::kMicrosecond);
 BENCHMARK(ToolOffset)->Arg(2)->Arg(5)->Arg(10)->Arg(20)->Arg(30)->Arg(40)->Unit(benchmark::kNanosecond);
 BENCHMARK(Estimate)->Arg(2)->Arg(20)->Arg(40)->Unit(benchmark::kMicrosecond);
 BENCHMARK_MAIN();

@@ -39,9 +39,9 @@ class MachinedFloor {
  private:
   const reduce::SurfaceMesh& target_;
   reduce::CutTimeIndex covers_;
-  reduce::StepFunction offsets_;  // (time, offset from then on)
+  reduce::OffsetHistory offsets_;
   mutable std::vector<std::pair<double, double>> scratch_;
-  mutable std::vector<double> instants_;
+  mutable std::vector<reduce::CutPieceEnd> instants_;
 };
 
 }  // namespace drom::online

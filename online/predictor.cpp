@@ -44,8 +44,6 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
       if (h.times().size() != model_.histories.front().times().size() || h.times() != model_.histories.front().times())
         throw std::invalid_argument("predictor: the model's histories must share their instants");
   target_cache_.reset(model_.histories, n);
-  w_values_.setZero(static_cast<Eigen::Index>(n) * kSlots);
-  w_tag_.assign(static_cast<std::size_t>(n) * kSlots, {-1, -1});
   if (model_.has_top()) {
     if (static_cast<int>(model_.top_histories.size()) != r_ || model_.top_cut_time.size() != model_.top.node_count())
       throw std::invalid_argument("predictor: the model's top needs one history per mode and a cut time per node");
@@ -97,41 +95,39 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
   snapshot_.store(std::make_shared<const Snapshot>(Snapshot{prior_mean, prior_precision_.llt().solve(Eigen::MatrixXd::Identity(r_, r_)), false}));
 }
 
-void Predictor::basis_at(InstantCache& cache, const reduce::SurfacePoint& p, double t, double* out) {
-  std::fill(out, out + r_, 0.0);
+void Predictor::enter_face(InstantCache& cache, const reduce::SurfacePoint& p, const reduce::TimeInterval& now, FaceMemo& memo) {
+  memo.face = p.face;
+  memo.w.clear();
+  memo.rows_now.setZero(p.count, r_);
   if (r_ == 0) return;
-  const auto& instants = model_.histories.front().times();
-  const auto at = reduce::locate_time(instants, t);
-  const Eigen::Index next = at.i + (instants.size() > 1 ? 1 : 0);
+  const Eigen::Index next = now.i + (model_.histories.front().times().size() > 1 ? 1 : 0);
   for (int q = 0; q < p.count; ++q) {
     const int node = p.nodes[static_cast<std::size_t>(q)];
-    const double N = p.weights[static_cast<std::size_t>(q)];
-    const double* a = cache.at(node, at.i);
+    const double* a = cache.at(node, now.i);
     const double* b = cache.at(node, next);
-    for (int k = 0; k < r_; ++k) out[k] += N * ((1 - at.weight) * a[k] + at.weight * b[k]);
+    double* row = memo.rows_now.row(q).data();
+    for (int k = 0; k < r_; ++k) row[k] = (1 - now.weight) * a[k] + now.weight * b[k];
   }
 }
 
-const double* Predictor::scalar_slot(int node, Eigen::Index j, const Eigen::VectorXd& alpha) {
-  const std::size_t slot = static_cast<std::size_t>(node) * kSlots + static_cast<std::size_t>(j % kSlots);
-  if (w_tag_[slot].first != j || w_tag_[slot].second != w_generation_) {
-    w_tag_[slot] = {j, w_generation_};
-    w_values_[static_cast<Eigen::Index>(slot)] = Eigen::Map<const Eigen::VectorXd>(target_cache_.at(node, j), r_).dot(alpha);
-  }
-  return &w_values_[static_cast<Eigen::Index>(slot)];
-}
-
-double Predictor::w_at(const reduce::SurfacePoint& p, double t, const Eigen::VectorXd& alpha) {
-  if (r_ == 0) return 0;
-  const auto& instants = model_.histories.front().times();
-  const auto at = reduce::locate_time(instants, t);
-  const Eigen::Index next = at.i + (instants.size() > 1 ? 1 : 0);
-  double w = 0;
+void Predictor::FaceMemo::row_at(const reduce::SurfacePoint& p, double* out) const {
+  // By hand: at r ~ 20 Eigen's runtime-sized product costs more in dispatch than in arithmetic.
+  const Eigen::Index r = rows_now.cols();
+  std::fill(out, out + r, 0.0);
   for (int q = 0; q < p.count; ++q) {
-    const int node = p.nodes[static_cast<std::size_t>(q)];
-    w += p.weights[static_cast<std::size_t>(q)] * ((1 - at.weight) * *scalar_slot(node, at.i, alpha) + at.weight * *scalar_slot(node, next, alpha));
+    const double N = p.weights[static_cast<std::size_t>(q)];
+    const double* row = rows_now.row(q).data();
+    for (Eigen::Index k = 0; k < r; ++k) out[k] += N * row[k];
   }
-  return w;
+}
+
+const double* Predictor::face_w(FaceMemo& memo, const reduce::SurfacePoint& p, Eigen::Index j, const Eigen::VectorXd& alpha) {
+  for (const auto& [instant, w] : memo.w)
+    if (instant == j) return w.data();
+  auto& [instant, w] = memo.w.emplace_back();
+  instant = j;
+  for (int q = 0; q < p.count; ++q) w[static_cast<std::size_t>(q)] = Eigen::Map<const Eigen::VectorXd>(target_cache_.at(p.nodes[static_cast<std::size_t>(q)], j), r_).dot(alpha);
+  return w.data();
 }
 
 void Predictor::InstantCache::reset(const std::vector<reduce::SpaceTimeField>& h, int nodes) {
@@ -155,14 +151,9 @@ const double* Predictor::InstantCache::at(int node, Eigen::Index j) {
   return v;
 }
 
-double Predictor::applied_offset_at(double t) const { return reduce::step_value(offsets_, t); }
+double Predictor::applied_offset_at(double t) const { return offsets_.at(t); }
 
-void Predictor::set_offset(double t, double offset) {
-  // The history stays sorted by time; an entry only where the offset in force changes.
-  if (applied_offset_at(t) == offset) return;
-  const auto at = std::upper_bound(offsets_.begin(), offsets_.end(), t, [](double v, const auto& e) { return v < e.first; });
-  offsets_.emplace(at, t, offset);
-}
+void Predictor::set_offset(double t, double offset) { offsets_.set(t, offset); }
 
 void Predictor::record_offset(double t, double offset) {
   std::lock_guard<std::mutex> lock(ingest_);
@@ -181,10 +172,12 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
 
   // Per point, the differenced basis g = U1(x, t) - U1(x, t_cut(x)) at the point's own cut time; U1 is
   // linear in time between stored instants, so both terms are blends of nodal values at instants,
-  // which the per-node cache serves. The normal equations then get G^T G in one rank update.
-  u_.resize(r_);
+  // which the per-node cache serves (the first per face, FaceMemo). The normal equations then get
+  // G^T G in one rank update.
   const Eigen::VectorXd no_instants;
   const Eigen::VectorXd& instants = r_ > 0 ? model_.histories.front().times() : no_instants;
+  const reduce::TimeInterval now = reduce::locate_time(instants, t);
+  const bool one_instant = instants.size() < 2;
   if (G_.rows() < static_cast<Eigen::Index>(points.size())) {
     G_.resize(static_cast<Eigen::Index>(points.size()), r_);
     m_.resize(static_cast<Eigen::Index>(points.size()));
@@ -213,20 +206,22 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
     return true;
   };
   auto gather = [&](const Eigen::VectorXd& alpha) {
-    ++w_generation_;
     report = ProfileReport{};
     square_error = 0;
     used = 0;
-    int hint = -1, top_hint = -1;  // consecutive points of a profile mostly share a face
+    floor_memo_.face = top_memo_.face = -1;  // w in the memo belongs to the fit it was gathered with
+    int hint = -1, top_hint = -1;            // consecutive points of a profile mostly share a face
     for (const auto& pt : points) {
       if (!std::isfinite(pt.x) || !std::isfinite(pt.y) || !std::isfinite(pt.z)) {
         ++report.invalid;
         continue;
       }
       const auto p = model_.target.locate(pt.x, pt.y, hint, false);
+      double s0 = 0;
       if (p) {
         hint = p->face;
-        cut_index_.covers({pt.x, pt.y, model_.target.nominal_altitude(*p)}, t, covers_);
+        s0 = model_.target.nominal_altitude(*p);
+        cut_index_.covers({pt.x, pt.y, s0}, t, covers_);
       }
       if (!p || covers_.empty()) {
         // Not the machined floor: the stock's top, if the tool has been near none of its face's nodes.
@@ -240,22 +235,46 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
           ++(p ? report.not_yet_cut : report.outside);
           continue;
         }
-        basis_at(top_cache_, *q, t, G_.row(used).data());
+        if (q->face != top_memo_.face) enter_face(top_cache_, *q, now, top_memo_);
+        top_memo_.row_at(*q, G_.row(used).data());
         // One weight in the normal equations: the row carries sigma_floor / sigma_top.
         if (keep(pt.z - model_.top.nominal_altitude(*q), top_weight_, alpha)) ++report.used_top;
         continue;
       }
-      const double s0 = model_.target.nominal_altitude(*p);
+      if (p->face != floor_memo_.face) enter_face(target_cache_, *p, now, floor_memo_);
+      // w at this point at instant j, from its face's nodal values.
+      auto w_instant = [&](Eigen::Index j) {
+        const double* w = face_w(floor_memo_, *p, j, alpha);
+        double sum = 0;
+        for (int q = 0; q < p->count; ++q) sum += p->weights[static_cast<std::size_t>(q)] * w[q];
+        return sum;
+      };
       // The cut that left the floor here, by the current fit (the fit is linear between the model's
       // instants, as the truth is between its stations).
       const reduce::LowestCut cut = reduce::lowest_cut(
           covers_, instants, offsets_,
-          [&](double tau) { return w_at(*p, tau, alpha); },
+          [&](double, reduce::TimeInterval at) {
+            if (r_ == 0) return 0.0;
+            const double a = w_instant(at.i);
+            return at.weight == 0 ? a : (1 - at.weight) * a + at.weight * w_instant(at.i + 1);
+          },
           candidates_, 1e-12);
-      auto g = G_.row(used);
-      basis_at(target_cache_, *p, t, g.data());
-      basis_at(target_cache_, *p, cut.time, u_.data());
-      g -= u_.transpose();
+      double* g = G_.row(used).data();
+      floor_memo_.row_at(*p, g);
+      if (r_ > 0) {
+        const Eigen::Index next = cut.at.i + (one_instant ? 0 : 1);
+        for (int q = 0; q < p->count; ++q) {
+          const int node = p->nodes[static_cast<std::size_t>(q)];
+          const double ca = p->weights[static_cast<std::size_t>(q)] * (1 - cut.at.weight), cb = p->weights[static_cast<std::size_t>(q)] * cut.at.weight;
+          const double* a = target_cache_.at(node, cut.at.i);
+          if (cb == 0) {  // at an instant (most cuts): no need for the next one
+            for (int k = 0; k < r_; ++k) g[k] -= ca * a[k];
+            continue;
+          }
+          const double* b = target_cache_.at(node, next);
+          for (int k = 0; k < r_; ++k) g[k] -= ca * a[k] + cb * b[k];
+        }
+      }
       keep(pt.z - (s0 + cut.offset), 1.0, alpha);
     }
   };

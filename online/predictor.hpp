@@ -25,6 +25,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <atomic>
 #include <memory>
 #include <mutex>
@@ -163,30 +164,34 @@ class Predictor {
     void reset(const std::vector<reduce::SpaceTimeField>& h, int nodes);
     const double* at(int node, Eigen::Index j);
   };
-  // sum_q N_q U_k(node_q, t), k = 1..r, from a surface's cache.
-  void basis_at(InstantCache& cache, const reduce::SurfacePoint& p, double t, double* out);
+  using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  // One face under one gather: its nodes' U1 rows at the profile's time (count x r, blended once,
+  // since a profile's points cross a face one after the other) and, for the lowest-cut search,
+  // w = U1 . alpha at its nodes at each instant asked for so far.
+  struct FaceMemo {
+    int face = -1;
+    RowMatrix rows_now;
+    std::vector<std::pair<Eigen::Index, std::array<double, 9>>> w;
+    // sum_q N_q U1(node_q, t) at a point of the face: its row at the profile's time.
+    void row_at(const reduce::SurfacePoint& p, double* out) const;
+  };
+  void enter_face(InstantCache& cache, const reduce::SurfacePoint& p, const reduce::TimeInterval& now, FaceMemo& memo);
+  // w at the face's nodes at instant j for the fit alpha (target surface).
+  const double* face_w(FaceMemo& memo, const reduce::SurfacePoint& p, Eigen::Index j, const Eigen::VectorXd& alpha);
   std::vector<std::pair<double, double>> covers_;
-  std::vector<double> candidates_;
+  std::vector<reduce::CutPieceEnd> candidates_;
   InstantCache target_cache_, top_cache_;
-  // w of one fit at a target node and a stored instant, U1(node, j) . alpha: the lowest-cut search
-  // compares w at many instants and needs no more than this scalar (slot j mod kSlots, tagged with
-  // the instant and the fit's generation; a new fit is a new generation).
-  const double* scalar_slot(int node, Eigen::Index j, const Eigen::VectorXd& alpha);
-  double w_at(const reduce::SurfacePoint& p, double t, const Eigen::VectorXd& alpha);
-  Eigen::VectorXd w_values_;
-  std::vector<std::pair<Eigen::Index, long long>> w_tag_;
-  long long w_generation_ = 0;
+  FaceMemo floor_memo_, top_memo_;
   double top_weight_ = 1;                       // sigma_floor / sigma_top: a top row's scale in the shared normal equations
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> G_;  // the profile's differenced basis, points x r
   Eigen::VectorXd m_;                           // and its readings net of the commanded altitude
-  Eigen::VectorXd u_;
   Eigen::MatrixXd normal_;  // sum g g^T / sigma^2
   Eigen::VectorXd rhs_;     // sum g m / sigma^2
   long long points_ = 0;
   int profiles_ = 0;
   double last_profile_time_ = 0;
   std::vector<double> recent_square_error_, recent_count_;  // per recent profile
-  reduce::StepFunction offsets_;                            // (program time, applied offset), increasing time
+  reduce::OffsetHistory offsets_;                           // the applied offset over program time
   bool learned_ = false;
   std::atomic<std::shared_ptr<const Snapshot>> snapshot_;
 

@@ -118,6 +118,7 @@ void CutTimeIndex::covers(const Eigen::Vector3d& point, double until, std::vecto
   const int i = static_cast<int>(std::floor((point.x() - x0_) / cell_)), j = static_cast<int>(std::floor((point.y() - y0_) / cell_));
   if (buckets_.empty() || i < 0 || j < 0 || i >= nx_ || j >= ny_) return;
   for (int s : buckets_[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)]) {
+    if (path_(s, 3) > until) break;  // a bucket's segments come in time order
     double entry, exit;
     if (!segment_cover(path_, s, point, radius_, z_tolerance_, entry, exit) || entry > until) continue;
     out.emplace_back(entry, std::min(exit, until));

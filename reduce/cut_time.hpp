@@ -4,59 +4,93 @@
 // <= the tool radius). The light model stores it per target node; the predictor needs it at every
 // laser point, where a face's nodes may have been cut passes apart, so segments are bucketed on a
 // grid and a query looks at the few that pass nearby.
+#include "reduce/offset_history.hpp"
+#include "reduce/space_time_field.hpp"
+
 #include <Eigen/Core>
 
 #include <algorithm>
 #include <limits>
+#include <tuple>
 #include <utility>
 #include <vector>
 
 namespace drom::reduce {
 
-// A step function of time: (time, value from then on), times increasing; 0 before the first.
-using StepFunction = std::vector<std::pair<double, double>>;
-inline double step_value(const StepFunction& steps, double t) {
-  const auto it = std::upper_bound(steps.begin(), steps.end(), t, [](double v, const auto& e) { return v < e.first; });
-  return it == steps.begin() ? 0.0 : std::prev(it)->second;
-}
-
 struct LowestCut {
   double bottom = std::numeric_limits<double>::infinity();  // offset - w at the winning instant
   double time = 0, offset = 0;
+  TimeInterval at;  // where `time` falls among the instants (as locate_time gives it)
+};
+
+// lowest_cut's scratch: the ends of the pieces the covers split into at the instants.
+struct CutPieceEnd {
+  double tau = 0, w = 0;
+  Eigen::Index above = 0;       // the first instant after tau
+  bool starts_cover = false;
+  std::size_t first = 0, last = 0;  // the offset's changes inside the piece that starts here
 };
 
 // Of the tool's covers of a point (entry, exit), the cut with the lowest bottom in the material's
 // frame, offset(tau) - w(tau): the floor a flat tool leaves there. w is linear between `instants`
-// (w_at(tau) evaluates it at any instant) and the offset a step function, so the minimum lies at a
-// cover's ends, an offset change or an instant, and w between them is interpolated from its ends. A
-// candidate wins only when lower by more than `margin` (the earlier one keeps near-ties).
+// and the offset a step function, so the minimum lies at a cover's ends, an offset change (at the
+// lower of its two values) or an instant, and w between them is interpolated from its ends.
+// w_at(tau, where) evaluates w at tau, `where` being locate_time(instants, tau), found here as the
+// pieces are walked so that a caller holding w per instant needs no search. Of the candidates within
+// `margin` of the lowest, the earliest wins (so near-ties do not flip with rounding).
 template <class W>
-LowestCut lowest_cut(const std::vector<std::pair<double, double>>& covers, const Eigen::VectorXd& instants, const StepFunction& offsets, W&& w_at,
-                     std::vector<double>& pieces, double margin = 0) {
+LowestCut lowest_cut(const std::vector<std::pair<double, double>>& covers, const Eigen::VectorXd& instants, const OffsetHistory& offsets, W&& w_at,
+                     std::vector<CutPieceEnd>& ends, double margin = 0) {
   LowestCut best;
-  if (!covers.empty()) best.time = covers.front().first;
-  auto consider = [&](double o, double w, double tau) {
-    if (o - w < best.bottom - margin) best = {o - w, tau, o};
+  const Eigen::Index n = instants.size();
+  const double* t = instants.data();
+  // tau's interval from `above`, the index of the first instant after it (locate_time's clamping).
+  auto where = [&](double tau, Eigen::Index above) -> TimeInterval {
+    if (n < 2 || above == 0) return {0, 0.0};
+    if (above >= n) return {n - 2, 1.0};
+    return {above - 1, (tau - t[above - 1]) / (t[above] - t[above - 1])};
   };
+  if (covers.empty()) return best;
+  ends.clear();
   for (const auto& [entry, exit] : covers) {
-    pieces.assign({entry});
-    for (const double* c = std::upper_bound(instants.data(), instants.data() + instants.size(), entry); c != instants.data() + instants.size() && *c < exit; ++c)
-      pieces.push_back(*c);
-    pieces.push_back(exit);
-    for (std::size_t i = 0; i + 1 < pieces.size(); ++i) {
-      const double a = pieces[i], b = pieces[i + 1], wa = w_at(a), wb = w_at(b);
-      auto w_lin = [&](double tau) { return b > a ? wa + (wb - wa) * (tau - a) / (b - a) : wa; };
-      // Each stretch of constant offset inside [a, b] is bounded by its ends.
-      double from = a, o = step_value(offsets, a);
-      for (auto it = std::upper_bound(offsets.begin(), offsets.end(), a, [](double v, const auto& e) { return v < e.first; }); it != offsets.end() && it->first < b;
-           ++it) {
-        consider(o, w_lin(from), from);
-        consider(o, w_lin(it->first), it->first);
-        from = it->first, o = it->second;
-      }
-      consider(o, w_lin(from), from);
-      consider(o, w_lin(b), b);
-    }
+    const double* c = std::upper_bound(t, t + n, entry);
+    ends.push_back({entry, 0, c - t, true});
+    for (; c != t + n && *c < exit; ++c) ends.push_back({*c, 0, c - t + 1, false});
+    ends.push_back({exit, 0, c - t, false});
+  }
+  for (auto& e : ends) e.w = w_at(e.tau, where(e.tau, e.above));
+  auto value_before = [&](std::size_t k) { return k > 0 ? offsets.value(k - 1) : 0.0; };  // in force just before change k
+  auto slope = [&](std::size_t i) {
+    const CutPieceEnd &a = ends[i], &b = ends[i + 1];
+    return b.tau > a.tau ? (b.w - a.w) / (b.tau - a.tau) : 0.0;
+  };
+  // The lowest bottom: at a piece's ends, and at the offset's changes inside it (its hull search).
+  best.bottom = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i + 1 < ends.size(); ++i) {
+    if (ends[i + 1].starts_cover) continue;
+    auto& a = ends[i];
+    const auto& b = ends[i + 1];
+    std::tie(a.first, a.last) = offsets.inside(a.tau, b.tau);
+    best.bottom = std::min({best.bottom, value_before(a.first) - a.w, value_before(a.last) - b.w});
+    const std::size_t k = offsets.least(a.first, a.last, slope(i), a.tau);
+    if (k != OffsetHistory::npos) best.bottom = std::min(best.bottom, offsets.sloped(k, slope(i), a.tau) - a.w);
+  }
+  // The earliest candidate within the margin of it.
+  const double bound = best.bottom + margin;
+  for (std::size_t i = 0; i + 1 < ends.size(); ++i) {
+    if (ends[i + 1].starts_cover) continue;
+    const auto &a = ends[i], &b = ends[i + 1];
+    if (double o = value_before(a.first); o - a.w <= bound) return {o - a.w, a.tau, o, where(a.tau, a.above)};
+    if (const std::size_t k = offsets.earliest_at_most(a.first, a.last, slope(i), a.tau, bound + a.w); k != OffsetHistory::npos)
+      return {offsets.sloped(k, slope(i), a.tau) - a.w, offsets.time(k), offsets.low(k), where(offsets.time(k), a.above)};
+    if (double o = value_before(a.last); o - b.w <= bound) return {o - b.w, b.tau, o, where(b.tau, b.above)};
+  }
+  // Rounding kept the lowest itself out of reach (sloped - w against bound + w): take it by value.
+  for (std::size_t i = 0; i + 1 < ends.size(); ++i) {
+    if (ends[i + 1].starts_cover) continue;
+    const auto& a = ends[i];
+    if (const std::size_t k = offsets.least(a.first, a.last, slope(i), a.tau); k != OffsetHistory::npos && offsets.sloped(k, slope(i), a.tau) - a.w <= bound)
+      return {offsets.sloped(k, slope(i), a.tau) - a.w, offsets.time(k), offsets.low(k), where(offsets.time(k), a.above)};
   }
   return best;
 }

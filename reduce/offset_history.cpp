@@ -1,0 +1,152 @@
+#include "reduce/offset_history.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace drom::reduce {
+
+double step_value(const StepFunction& steps, double t) {
+  const auto it = std::upper_bound(steps.begin(), steps.end(), t, [](double v, const auto& e) { return v < e.first; });
+  return it == steps.begin() ? 0.0 : std::prev(it)->second;
+}
+
+void OffsetHistory::set(double t, double value) {
+  if (at(t) == value) return;
+  // After any change at the same time, so that the latest setting wins.
+  const auto it = std::upper_bound(steps_.begin(), steps_.end(), t, [](double v, const auto& e) { return v < e.first; });
+  const auto k = static_cast<std::size_t>(it - steps_.begin());
+  steps_.emplace(it, t, value);
+  reindex_from(k);
+}
+
+void OffsetHistory::reindex_from(std::size_t k) {
+  const std::size_t n = steps_.size();
+  time_.resize(n), low_.resize(n);
+  for (std::size_t j = k; j < n; ++j) {
+    time_[j] = steps_[j].first;
+    low_[j] = std::min(j > 0 ? steps_[j - 1].second : 0.0, steps_[j].second);
+  }
+  // Blocks that reach change k or later are stale; the rest stand.
+  for (std::size_t level = 0; level < hull_.size(); ++level) {
+    const std::size_t keep = k >> (level + kBaseLevel);
+    if (start_[level].size() > keep + 1) {
+      hull_[level].resize(start_[level][keep]);
+      start_[level].resize(keep + 1);
+    }
+  }
+  // A block is built when its last change arrives, from its halves' hulls.
+  for (std::size_t count = k + 1; count <= n; ++count)
+    for (int l = kBaseLevel; count % (std::size_t{1} << l) == 0; ++l) build_block(l, (count >> l) - 1);
+}
+
+void OffsetHistory::build_block(int l, std::size_t block) {
+  const auto level = static_cast<std::size_t>(l - kBaseLevel);
+  if (hull_.size() <= level) hull_.emplace_back(), start_.emplace_back(1, 0);
+  auto& hull = hull_[level];
+  const std::size_t begin = hull.size();
+  auto add = [&](std::size_t k) {
+    // Andrew's monotone chain, lower side: drop the last vertex while it does not turn left.
+    while (hull.size() >= begin + 2) {
+      const std::size_t o = hull[hull.size() - 2], a = hull.back();
+      const double cross = (time_[a] - time_[o]) * (low_[k] - low_[o]) - (low_[a] - low_[o]) * (time_[k] - time_[o]);
+      if (cross > 0) break;
+      hull.pop_back();
+    }
+    hull.push_back(k);
+  };
+  if (level == 0) {
+    for (std::size_t k = block << l; k < (block + 1) << l; ++k) add(k);
+  } else {
+    // The lower hull of a union lies on the halves' lower hulls.
+    const auto& below = hull_[level - 1];
+    const auto& at = start_[level - 1];
+    for (std::size_t i = at[2 * block]; i < at[2 * block + 2]; ++i) add(below[i]);
+  }
+  start_[level].push_back(hull.size());
+}
+
+std::pair<std::size_t, std::size_t> OffsetHistory::inside(double a, double b) const {
+  const auto first = static_cast<std::size_t>(std::upper_bound(time_.begin(), time_.end(), a) - time_.begin());
+  const auto last = static_cast<std::size_t>(std::lower_bound(time_.begin(), time_.end(), b) - time_.begin());
+  return {first, std::max(first, last)};
+}
+
+std::size_t OffsetHistory::block_least(int l, std::size_t block, double m) const {
+  // low - m t is convex along a lower hull: the first vertex whose next edge rises at least as steeply as m.
+  const auto level = static_cast<std::size_t>(l - kBaseLevel);
+  const std::size_t* h = hull_[level].data() + start_[level][block];
+  std::size_t lo = 0, hi = start_[level][block + 1] - start_[level][block] - 1;
+  while (lo < hi) {
+    const std::size_t mid = (lo + hi) / 2;
+    if (low_[h[mid + 1]] - low_[h[mid]] >= m * (time_[h[mid + 1]] - time_[h[mid]])) hi = mid;
+    else lo = mid + 1;
+  }
+  return h[lo];
+}
+
+template <class Visit>
+void OffsetHistory::tile(std::size_t first, std::size_t last, Visit&& visit) const {
+  std::size_t k = first;
+  while (k < last) {
+    int best = -1;
+    for (int l = kBaseLevel;; ++l) {
+      const std::size_t size = std::size_t{1} << l, level = static_cast<std::size_t>(l - kBaseLevel);
+      if (k % size != 0 || k + size > last || level >= hull_.size() || (k >> l) + 1 >= start_[level].size()) break;
+      best = l;
+    }
+    if (best < 0) {
+      if (!visit(-1, k)) return;
+      ++k;
+    } else {
+      if (!visit(best, k >> best)) return;
+      k += std::size_t{1} << best;
+    }
+  }
+}
+
+std::size_t OffsetHistory::least(std::size_t first, std::size_t last, double m, double a) const {
+  std::size_t best = npos;
+  double best_value = 0;
+  tile(first, last, [&](int l, std::size_t where) {
+    const std::size_t k = l < 0 ? where : block_least(l, where, m);
+    const double v = sloped(k, m, a);
+    if (best == npos || v < best_value) best = k, best_value = v;
+    return true;
+  });
+  return best;
+}
+
+namespace {
+// The hulls' minima and the changes' own values are rounded differently: a block is searched when its
+// minimum comes within this of the bound (the changes themselves are then compared exactly).
+double with_slack(double bound) { return bound + 1e-12 * (1 + std::abs(bound)); }
+}  // namespace
+
+std::size_t OffsetHistory::block_earliest(int l, std::size_t block, double m, double a, double bound) const {
+  if (l == kBaseLevel) {
+    for (std::size_t k = block << l; k < (block + 1) << l; ++k)
+      if (sloped(k, m, a) <= bound) return k;
+    return npos;
+  }
+  for (std::size_t half : {2 * block, 2 * block + 1}) {
+    if (sloped(block_least(l - 1, half, m), m, a) > with_slack(bound)) continue;
+    const std::size_t k = block_earliest(l - 1, half, m, a, bound);
+    if (k != npos) return k;
+  }
+  return npos;
+}
+
+std::size_t OffsetHistory::earliest_at_most(std::size_t first, std::size_t last, double m, double a, double bound) const {
+  std::size_t found = npos;
+  tile(first, last, [&](int l, std::size_t where) {
+    if (l < 0) {
+      if (sloped(where, m, a) <= bound) found = where;
+    } else if (sloped(block_least(l, where, m), m, a) <= with_slack(bound)) {
+      found = block_earliest(l, where, m, a, bound);
+    }
+    return found == npos;
+  });
+  return found;
+}
+
+}  // namespace drom::reduce

@@ -1,0 +1,61 @@
+#pragma once
+// The tool-length offset commanded over program time, a step function, indexed for the lowest-cut
+// search. That search weighs, over the stretch of time the tool covered a point, every change of the
+// offset: a 100 Hz control loop puts some 250 of them under a 25 mm tool at 10 mm/s, and a laser
+// profile asks for them at hundreds of points. At a change the tool has cut at both values, so the
+// change stands for the lower one ("low"); between stored instants the surface moves linearly in
+// time, so a cut's bottom there is low - m (t - a) for a slope m the point's own. The lower convex
+// hulls of the changes over aligned blocks of 2^l of them answer the least of that over any range of
+// changes in O(log^2 n) instead of a scan.
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+namespace drom::reduce {
+
+// A step function of time: (time, value from then on), times increasing; 0 before the first.
+using StepFunction = std::vector<std::pair<double, double>>;
+double step_value(const StepFunction& steps, double t);
+
+class OffsetHistory {
+ public:
+  static constexpr std::size_t npos = static_cast<std::size_t>(-1);
+
+  // The value from t on; nothing if it is already the value at t. Appending is amortized O(log n); a
+  // t before the last change re-indexes the changes after it.
+  void set(double t, double value);
+  double at(double t) const { return step_value(steps_, t); }
+  const StepFunction& steps() const { return steps_; }
+  std::size_t size() const { return steps_.size(); }
+
+  // Changes k with a < time(k) < b, as the index range [first, last).
+  std::pair<std::size_t, std::size_t> inside(double a, double b) const;
+  double time(std::size_t k) const { return time_[k]; }
+  double value(std::size_t k) const { return steps_[k].second; }
+  double low(std::size_t k) const { return low_[k]; }  // the lower of the values either side of change k
+  // low(k) - m (time(k) - a), the quantity both searches below compare.
+  double sloped(std::size_t k, double m, double a) const { return low_[k] - m * (time_[k] - a); }
+  // Over k in [first, last): the k of the least sloped(k, m, a) (npos if the range is empty) ...
+  std::size_t least(std::size_t first, std::size_t last, double m, double a) const;
+  // ... and the earliest k with sloped(k, m, a) <= bound (npos if none).
+  std::size_t earliest_at_most(std::size_t first, std::size_t last, double m, double a, double bound) const;
+
+ private:
+  static constexpr int kBaseLevel = 3;  // blocks of fewer than 8 changes are scanned
+  void reindex_from(std::size_t k);
+  void build_block(int level, std::size_t block);
+  std::size_t block_least(int level, std::size_t block, double m) const;
+  std::size_t block_earliest(int level, std::size_t block, double m, double a, double bound) const;
+  // Calls visit(level, block) for the aligned blocks tiling [first, last), in time order, with
+  // level -1 for a single change.
+  template <class Visit>
+  void tile(std::size_t first, std::size_t last, Visit&& visit) const;
+
+  StepFunction steps_;
+  std::vector<double> time_, low_;
+  // Per level l >= kBaseLevel (index l - kBaseLevel): the hull of block b is
+  // hull_[l][start_[l][b] .. start_[l][b + 1]), change indices in time order.
+  std::vector<std::vector<std::size_t>> hull_, start_;
+};
+
+}  // namespace drom::reduce
