@@ -2,7 +2,8 @@
 // and estimate(), for r = 2 ... 40, on a model the size of the default flat plate's: the 600 x 600 mm
 // pocket floor as 24 x 24 Quad8 faces (1825 nodes), 30 one-way passes at 10 mm/s, a station every
 // 25 mm (about 780), each basis history kept as 30 separated terms.
-//   build/bench/predictor_bench [--benchmark_format=json]
+//   build/bench/predictor_bench [--benchmark_format=json] [--benchmark_repetitions=5]
+// The arguments: r, the time between profiles (ms) and the offset's refresh rate (Hz, 0: none).
 // Goals: under 50 us per 800-point profile and under 1 us per offset query at r = 20.
 #include "online/predictor.hpp"
 
