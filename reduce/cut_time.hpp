@@ -66,18 +66,20 @@ LowestCut lowest_cut(const std::vector<std::pair<double, double>>& covers, const
   };
   // The lowest bottom: at a piece's ends, and at the offset's changes inside it (its hull search).
   best.bottom = std::numeric_limits<double>::infinity();
+  std::size_t lowest_piece = 0;
   for (std::size_t i = 0; i + 1 < ends.size(); ++i) {
     if (ends[i + 1].starts_cover) continue;
     auto& a = ends[i];
     const auto& b = ends[i + 1];
     std::tie(a.first, a.last) = offsets.inside(a.tau, b.tau);
-    best.bottom = std::min({best.bottom, value_before(a.first) - a.w, value_before(a.last) - b.w});
     const std::size_t k = offsets.least(a.first, a.last, slope(i), a.tau);
-    if (k != OffsetHistory::npos) best.bottom = std::min(best.bottom, offsets.sloped(k, slope(i), a.tau) - a.w);
+    const double piece_lowest = std::min({value_before(a.first) - a.w, value_before(a.last) - b.w,
+                                          k != OffsetHistory::npos ? offsets.sloped(k, slope(i), a.tau) - a.w : std::numeric_limits<double>::infinity()});
+    if (piece_lowest < best.bottom) best.bottom = piece_lowest, lowest_piece = i;
   }
-  // The earliest candidate within the margin of it.
+  // The earliest candidate within the margin of it (at the latest, in the piece that holds it).
   const double bound = best.bottom + margin;
-  for (std::size_t i = 0; i + 1 < ends.size(); ++i) {
+  for (std::size_t i = 0; i <= lowest_piece; ++i) {
     if (ends[i + 1].starts_cover) continue;
     const auto &a = ends[i], &b = ends[i + 1];
     if (double o = value_before(a.first); o - a.w <= bound) return {o - a.w, a.tau, o, where(a.tau, a.above)};
