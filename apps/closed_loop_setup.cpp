@@ -144,6 +144,7 @@ TruthPlay ClosedLoopInputs::play(double factor) const {
   if (truth.top_history.size() > 0) {
     p.top_history = std::make_unique<online::SurfaceHistory>(model.top, truth.top_history * factor, truth.station_times);
     p.part.top = p.top_history.get();
+    p.part.top_cut_time = &model.top_cut_time;
   }
   p.part.final_displacement = truth.final_displacement * factor;
   // The stock's top straight above (x, y), found on the part's parametric outer surface.

@@ -143,9 +143,13 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
         if (truth.top)
           if (const auto q = truth.top->mesh().locate(x, y, top_hint, false)) {
             top_hint = q->face;
-            return *top + truth.top->at(*q, t_true);
+            bool standing = true;
+            for (int i = 0; i < q->count && standing && truth.top_cut_time; ++i) standing = (*truth.top_cut_time)[q->nodes[static_cast<std::size_t>(i)]] > t_true;
+            if (standing || !p) return *top + truth.top->at(*q, t_true);
           }
-        // Without the truth's top there: the floor's w below it (a thin plate bends as one).
+        // Without the truth's top there, or where its face is partly cut (held values of removed
+        // material): the column under the point is intact, and its top moves with the floor-level
+        // point below (a thin plate bends as one).
         return *top + (p ? w_true.at(*p, t_true) : 0.0);
       };
       const Eigen::Vector3d believed = reckoning.position_at_program_time(t_believed);

@@ -33,6 +33,9 @@ namespace drom::online {
 struct TruePart {
   const SurfaceHistory* target = nullptr;  // w of the target surface over program time (mm)
   const SurfaceHistory* top = nullptr;     // w of the stock's top (on the model's top mesh); none: the top reads as not moving
+  // Program time each top node is cut (its values are held from then on). Where a top face has a cut
+  // node, the stock still standing over the pocket is read through the floor-level point below it.
+  const Eigen::VectorXd* top_cut_time = nullptr;
   Eigen::Matrix3Xd final_displacement;     // after unclamping, at the model's final-shape nodes (mm)
   // Nominal altitude of the stock's top at (x, y); nothing off the part.
   std::function<std::optional<double>(double, double)> stock_top;
