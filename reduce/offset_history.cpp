@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 
 namespace drom::reduce {
 
@@ -12,6 +14,7 @@ double step_value(const StepFunction& steps, double t) {
 
 void OffsetHistory::set(double t, double value) {
   if (at(t) == value) return;
+  if (steps_.size() >= std::numeric_limits<std::uint32_t>::max()) throw std::length_error("offset history: more than 2^32 changes");
   // After any change at the same time, so that the latest setting wins.
   const auto it = std::upper_bound(steps_.begin(), steps_.end(), t, [](double v, const auto& e) { return v < e.first; });
   const auto k = static_cast<std::size_t>(it - steps_.begin());
@@ -52,7 +55,7 @@ void OffsetHistory::build_block(int l, std::size_t block) {
       if (cross > 0) break;
       hull.pop_back();
     }
-    hull.push_back(k);
+    hull.push_back(static_cast<std::uint32_t>(k));
   };
   if (level == 0) {
     for (std::size_t k = block << l; k < (block + 1) << l; ++k) add(k);
@@ -74,7 +77,7 @@ std::pair<std::size_t, std::size_t> OffsetHistory::inside(double a, double b) co
 std::size_t OffsetHistory::block_least(int l, std::size_t block, double m) const {
   // low - m t is convex along a lower hull: the first vertex whose next edge rises at least as steeply as m.
   const auto level = static_cast<std::size_t>(l - kBaseLevel);
-  const std::size_t* h = hull_[level].data() + start_[level][block];
+  const std::uint32_t* h = hull_[level].data() + start_[level][block];
   std::size_t lo = 0, hi = start_[level][block + 1] - start_[level][block] - 1;
   while (lo < hi) {
     const std::size_t mid = (lo + hi) / 2;

@@ -8,6 +8,7 @@
 // hulls of the changes over aligned blocks of 2^l of them answer the least of that over any range of
 // changes in O(log^2 n) instead of a scan.
 #include <cstddef>
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -55,7 +56,8 @@ class OffsetHistory {
   std::vector<double> time_, low_;
   // Per level l >= kBaseLevel (index l - kBaseLevel): the hull of block b is
   // hull_[l][start_[l][b] .. start_[l][b + 1]), change indices in time order.
-  std::vector<std::vector<std::size_t>> hull_, start_;
+  std::vector<std::vector<std::uint32_t>> hull_;  // 32-bit: a run's history is some 1e5-1e6 changes
+  std::vector<std::vector<std::size_t>> start_;
 };
 
 }  // namespace drom::reduce
