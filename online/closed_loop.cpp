@@ -45,6 +45,25 @@ int pass_of(const std::vector<Pass>& passes, double t) {
 
 }  // namespace
 
+std::optional<double> true_height(const TruePart& truth, const reduce::SurfaceMesh& target, const MachinedFloor& floor, double x, double y, double t, int& hint,
+                                  int& top_hint) {
+  const auto p = target.locate(x, y, hint, false);
+  if (p) {
+    hint = p->face;
+    if (const auto z = floor.surface(x, y, *p, *truth.target, t)) return z;
+  }
+  const auto top = truth.stock_top(x, y);
+  if (!top) return std::nullopt;
+  if (truth.top)
+    if (const auto q = truth.top->mesh().locate(x, y, top_hint, false)) {
+      top_hint = q->face;
+      bool standing = true;
+      for (int i = 0; i < q->count && standing && truth.top_cut_time; ++i) standing = (*truth.top_cut_time)[q->nodes[static_cast<std::size_t>(i)]] > t;
+      if (standing || !p) return *top + truth.top->at(*q, t);
+    }
+  return *top + (p ? truth.target->at(*p, t) : 0.0);
+}
+
 ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void(double)>& progress) const {
   const auto start = std::chrono::steady_clock::now();
   if (!truth.target || truth.final_displacement.cols() != model_.shape_nodes.cols())
@@ -132,26 +151,7 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
     // 3. A profile: readings from where the sheet truly is, placed where the predictor believes.
     if (k % scan_every == 0) {
       int hint = -1, top_hint = -1;
-      const HeightField read = [&](double x, double y) -> std::optional<double> {
-        const auto p = target.locate(x, y, hint, false);
-        if (p) {
-          hint = p->face;
-          if (const auto z = floor.surface(x, y, *p, w_true, t_true)) return z;
-        }
-        const auto top = truth.stock_top(x, y);
-        if (!top) return std::nullopt;
-        if (truth.top)
-          if (const auto q = truth.top->mesh().locate(x, y, top_hint, false)) {
-            top_hint = q->face;
-            bool standing = true;
-            for (int i = 0; i < q->count && standing && truth.top_cut_time; ++i) standing = (*truth.top_cut_time)[q->nodes[static_cast<std::size_t>(i)]] > t_true;
-            if (standing || !p) return *top + truth.top->at(*q, t_true);
-          }
-        // Without the truth's top there, or where its face is partly cut (held values of removed
-        // material): the column under the point is intact, and its top moves with the floor-level
-        // point below (a thin plate bends as one).
-        return *top + (p ? w_true.at(*p, t_true) : 0.0);
-      };
+      const HeightField read = [&](double x, double y) { return true_height(truth, target, floor, x, y, t_true, hint, top_hint); };
       const Eigen::Vector3d believed = reckoning.position_at_program_time(t_believed);
       const auto points = scan(settings_.sheet, settings_.errors, believed, tip, read, rng);
       if (calibrating && result.profiles % 10 == 0) {

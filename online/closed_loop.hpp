@@ -41,6 +41,14 @@ struct TruePart {
   std::function<std::optional<double>(double, double)> stock_top;
 };
 
+// What the sheet truly reads at (x, y) at true program time t: the floor the tool cut there; else
+// the stock's top, moved by the truth's own top where that top face still stands whole, and by the
+// floor-level w below it where the face is partly cut (its held values belong to removed material,
+// while the column under the point is intact) or where the truth has no top; nothing off the part.
+// `hint`, `top_hint`: the faces of the last point read (a profile's points mostly share one).
+std::optional<double> true_height(const TruePart& truth, const reduce::SurfaceMesh& target, const MachinedFloor& floor, double x, double y, double t, int& hint,
+                                  int& top_hint);
+
 struct ClosedLoopSettings {
   LaserSheet sheet;
   SensorErrors errors;

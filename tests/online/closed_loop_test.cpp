@@ -103,6 +103,50 @@ TEST(MachinedFloor, MatchesABruteForceReadingWithOffsetsChangingUnderTheTool) {
   EXPECT_LT(worst, 1e-9);
 }
 
+// The sheet on the stock's top: the truth's own top where its face stands whole; where the tool has
+// reached one of the face's nodes, those nodes' held values belong to removed material, and a point
+// still standing over the pocket reads the floor-level w below it.
+TEST(ClosedLoop, SheetReadsAPartlyCutTopFaceThroughTheFloorBelow) {
+  reduce::LightModel m = test::synthetic_model();
+  test::add_synthetic_top(m);
+  const auto truth = truth_in_basis(m, kAlpha);
+  const double top_w = 0.3;  // far from the floor's w, so that the two readings cannot be confused
+  const Eigen::VectorXd& instants = m.histories.front().times();
+  const online::SurfaceHistory top(m.top, Eigen::MatrixXd::Constant(m.top.node_count(), instants.size() - 1, top_w), instants.tail(instants.size() - 1));
+  truth->part.top = &top;
+  truth->part.top_cut_time = &m.top_cut_time;
+  const online::MachinedFloor floor(m);
+  int standing = 0, partly_cut = 0, checked_floor = 0;
+  for (double t : {30.0, 60.0, 90.0}) {
+    for (double y = -15; y <= 115; y += 2.5)
+      for (double x = -15; x <= 215; x += 2.5) {
+        int hint = -1, top_hint = -1;
+        const auto z = online::true_height(truth->part, m.target, floor, x, y, t, hint, top_hint);
+        ASSERT_TRUE(z.has_value());  // the synthetic stock covers the whole grid
+        const auto p = m.target.locate(x, y);
+        if (p && floor.surface(x, y, *p, *truth->part.target, t)) {
+          ++checked_floor;
+          continue;
+        }
+        const auto q = m.top.locate(x, y);
+        ASSERT_TRUE(q.has_value());
+        bool whole = true;
+        for (int i = 0; i < q->count; ++i) whole = whole && m.top_cut_time[q->nodes[static_cast<std::size_t>(i)]] > t;
+        if (whole || !p) {
+          EXPECT_NEAR(*z, 10 + top_w, 1e-12) << x << ", " << y << " at " << t;
+          standing += whole;
+        } else {
+          EXPECT_NEAR(*z, 10 + truth->part.target->at(*p, t), 1e-12) << x << ", " << y << " at " << t;
+          ++partly_cut;
+        }
+      }
+  }
+  std::printf("sheet on the top: %d points on whole faces, %d on partly cut faces over the pocket, %d on the floor\n", standing, partly_cut, checked_floor);
+  EXPECT_GT(standing, 100);
+  EXPECT_GT(partly_cut, 100);
+  EXPECT_GT(checked_floor, 100);
+}
+
 TEST(ClosedLoop, WithoutCorrectionTheErrorIsTheDistortionWithItBelowToleranceOnceLearned) {
   const reduce::LightModel m = test::synthetic_model();
   const auto truth = truth_in_basis(m, kAlpha);
