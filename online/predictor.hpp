@@ -176,7 +176,7 @@ class Predictor {
     void row_at(const reduce::SurfacePoint& p, double* out) const;
   };
   void enter_face(InstantCache& cache, const reduce::SurfacePoint& p, const reduce::TimeInterval& now, FaceMemo& memo);
-  // w at the face's nodes at instant j for the fit alpha (target surface).
+  // w at the face's nodes at instant j for the fit alpha (target surface); valid until the next call.
   const double* face_w(FaceMemo& memo, const reduce::SurfacePoint& p, Eigen::Index j, const Eigen::VectorXd& alpha);
   std::vector<std::pair<double, double>> covers_;
   std::vector<reduce::CutPieceEnd> candidates_;
