@@ -57,9 +57,7 @@ std::optional<double> true_height(const TruePart& truth, const reduce::SurfaceMe
   if (truth.top)
     if (const auto q = truth.top->mesh().locate(x, y, top_hint, false)) {
       top_hint = q->face;
-      bool standing = true;
-      for (int i = 0; i < q->count && standing && truth.top_cut_time; ++i) standing = (*truth.top_cut_time)[q->nodes[static_cast<std::size_t>(i)]] > t;
-      if (standing || !p) return *top + truth.top->at(*q, t);
+      if (!p || !truth.top_cut_time || reduce::face_uncut(*q, *truth.top_cut_time, t)) return *top + truth.top->at(*q, t);
     }
   return *top + (p ? truth.target->at(*p, t) : 0.0);
 }

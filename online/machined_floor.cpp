@@ -23,7 +23,7 @@ std::optional<double> MachinedFloor::surface(double x, double y, const reduce::S
   const double s0 = target_.nominal_altitude(point);
   covers_.covers({x, y, s0}, t, scratch_);
   if (scratch_.empty()) return std::nullopt;
-  const double lowest = reduce::lowest_cut(scratch_, w.times(), offsets_, [&](double tau, reduce::TimeInterval) { return w.at_instant(point, tau); }, instants_).bottom;
+  const double lowest = reduce::lowest_cut(scratch_, w.times(), offsets_, [&](double, const reduce::TimeInterval& at) { return w.at_instant(point, at); }, instants_).bottom;
   return s0 + lowest + w.at_instant(point, t);
 }
 

@@ -226,12 +226,8 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
       if (!p || covers_.empty()) {
         // Not the machined floor: the stock's top, if the tool has been near none of its face's nodes.
         const auto q = use_top ? model_.top.locate(pt.x, pt.y, top_hint, false) : std::nullopt;
-        bool standing = q.has_value();
-        if (q) {
-          top_hint = q->face;
-          for (int i = 0; i < q->count && standing; ++i) standing = model_.top_cut_time[q->nodes[static_cast<std::size_t>(i)]] > t;
-        }
-        if (!standing) {
+        if (q) top_hint = q->face;
+        if (!q || !reduce::face_uncut(*q, model_.top_cut_time, t)) {
           ++(p ? report.not_yet_cut : report.outside);
           continue;
         }

@@ -34,20 +34,14 @@ const Eigen::VectorXd& SurfaceHistory::nodal(double t) const {
 
 double SurfaceHistory::at(const reduce::SurfacePoint& p, double t) const { return mesh_->interpolate(p, nodal(t))[0]; }
 
-double SurfaceHistory::at_instant(const reduce::SurfacePoint& p, double t) const {
-  const Eigen::Index n = times_.size();
-  Eigen::Index lo = 0, hi = 0;
-  double f = 0;
-  if (t >= times_[n - 1]) lo = hi = n - 1;
-  else if (t > times_[0]) {
-    hi = static_cast<Eigen::Index>(std::upper_bound(times_.data(), times_.data() + n, t) - times_.data());
-    lo = hi - 1;
-    f = (t - times_[lo]) / (times_[hi] - times_[lo]);
-  }
+double SurfaceHistory::at_instant(const reduce::SurfacePoint& p, double t) const { return at_instant(p, reduce::locate_time(times_, t)); }
+
+double SurfaceHistory::at_instant(const reduce::SurfacePoint& p, const reduce::TimeInterval& at) const {
+  const Eigen::Index next = at.i + 1;  // times_ holds the start and at least one station
   double v = 0;
   for (int q = 0; q < p.count; ++q) {
     const int node = p.nodes[static_cast<std::size_t>(q)];
-    v += p.weights[static_cast<std::size_t>(q)] * ((1 - f) * values_(node, lo) + f * values_(node, hi));
+    v += p.weights[static_cast<std::size_t>(q)] * ((1 - at.weight) * values_(node, at.i) + at.weight * values_(node, next));
   }
   return v;
 }

@@ -3,6 +3,7 @@
 // the surface's shape functions in space, linear in program time, 0 at the program's start and held
 // after the last station. In the closed loop it plays the real part: the truth run's displacement of
 // the target surface (design.md §6: the surface the tool cut then moves with it).
+#include "reduce/space_time_field.hpp"
 #include "reduce/surface_mesh.hpp"
 
 #include <Eigen/Core>
@@ -24,6 +25,8 @@ class SurfaceHistory {
   double at(const reduce::SurfacePoint& p, double t) const;  // through the cache (nodal(t))
   // The same from the face's nodes only, leaving the cache alone: for many instants at few points.
   double at_instant(const reduce::SurfacePoint& p, double t) const;
+  // ... where t's interval among times() is already known (reduce::locate_time's).
+  double at_instant(const reduce::SurfacePoint& p, const reduce::TimeInterval& at) const;
   const Eigen::VectorXd& times() const { return times_; }  // the start, then the stations
 
  private:

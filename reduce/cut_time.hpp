@@ -6,6 +6,7 @@
 // grid and a query looks at the few that pass nearby.
 #include "reduce/offset_history.hpp"
 #include "reduce/space_time_field.hpp"
+#include "reduce/surface_mesh.hpp"
 
 #include <Eigen/Core>
 
@@ -29,6 +30,7 @@ struct CutPieceEnd {
   Eigen::Index above = 0;       // the first instant after tau
   bool starts_cover = false;
   std::size_t first = 0, last = 0;  // the offset's changes inside the piece that starts here
+  double slope = 0;                 // and w's slope over it
 };
 
 // Of the tool's covers of a point (entry, exit), the cut with the lowest bottom in the material's
@@ -41,7 +43,6 @@ struct CutPieceEnd {
 template <class W>
 LowestCut lowest_cut(const std::vector<std::pair<double, double>>& covers, const Eigen::VectorXd& instants, const OffsetHistory& offsets, W&& w_at,
                      std::vector<CutPieceEnd>& ends, double margin = 0) {
-  LowestCut best;
   const Eigen::Index n = instants.size();
   const double* t = instants.data();
   // tau's interval from `above`, the index of the first instant after it (locate_time's clamping).
@@ -50,7 +51,7 @@ LowestCut lowest_cut(const std::vector<std::pair<double, double>>& covers, const
     if (above >= n) return {n - 2, 1.0};
     return {above - 1, (tau - t[above - 1]) / (t[above] - t[above - 1])};
   };
-  if (covers.empty()) return best;
+  if (covers.empty()) return {};
   ends.clear();
   for (const auto& [entry, exit] : covers) {
     const double* c = std::upper_bound(t, t + n, entry);
@@ -59,42 +60,56 @@ LowestCut lowest_cut(const std::vector<std::pair<double, double>>& covers, const
     ends.push_back({exit, 0, c - t, false});
   }
   for (auto& e : ends) e.w = w_at(e.tau, where(e.tau, e.above));
-  auto value_before = [&](std::size_t k) { return k > 0 ? offsets.value(k - 1) : 0.0; };  // in force just before change k
-  auto slope = [&](std::size_t i) {
-    const CutPieceEnd &a = ends[i], &b = ends[i + 1];
-    return b.tau > a.tau ? (b.w - a.w) / (b.tau - a.tau) : 0.0;
+  // A piece's candidates: its start (the offset in force there), a change inside it (its lower
+  // value), its end (the offset in force just before it).
+  auto value_before = [&](std::size_t k) { return k > 0 ? offsets.value(k - 1) : 0.0; };
+  auto at_start = [&](std::size_t i) {
+    const CutPieceEnd& a = ends[i];
+    const double o = value_before(a.first);
+    return LowestCut{o - a.w, a.tau, o, where(a.tau, a.above)};
   };
-  // The lowest bottom: at a piece's ends, and at the offset's changes inside it (its hull search).
-  best.bottom = std::numeric_limits<double>::infinity();
+  auto at_change = [&](std::size_t i, std::size_t k) {
+    const CutPieceEnd& a = ends[i];
+    return LowestCut{offsets.sloped(k, a.slope, a.tau) - a.w, offsets.time(k), offsets.low(k), where(offsets.time(k), a.above)};
+  };
+  auto at_end = [&](std::size_t i) {
+    const CutPieceEnd &a = ends[i], &b = ends[i + 1];
+    const double o = value_before(a.last);
+    return LowestCut{o - b.w, b.tau, o, where(b.tau, b.above)};
+  };
+  // The lowest: at a piece's ends, and at the offset's changes inside it (its hull search).
+  LowestCut lowest;
   std::size_t lowest_piece = 0;
+  auto consider = [&](const LowestCut& c, std::size_t i) {
+    if (c.bottom < lowest.bottom) lowest = c, lowest_piece = i;
+  };
   for (std::size_t i = 0; i + 1 < ends.size(); ++i) {
     if (ends[i + 1].starts_cover) continue;
-    auto& a = ends[i];
-    const auto& b = ends[i + 1];
+    CutPieceEnd &a = ends[i], &b = ends[i + 1];
     std::tie(a.first, a.last) = offsets.inside(a.tau, b.tau);
-    const std::size_t k = offsets.least(a.first, a.last, slope(i), a.tau);
-    const double piece_lowest = std::min({value_before(a.first) - a.w, value_before(a.last) - b.w,
-                                          k != OffsetHistory::npos ? offsets.sloped(k, slope(i), a.tau) - a.w : std::numeric_limits<double>::infinity()});
-    if (piece_lowest < best.bottom) best.bottom = piece_lowest, lowest_piece = i;
+    a.slope = b.tau > a.tau ? (b.w - a.w) / (b.tau - a.tau) : 0.0;
+    consider(at_start(i), i);
+    if (const std::size_t k = offsets.least(a.first, a.last, a.slope, a.tau); k != OffsetHistory::npos) consider(at_change(i, k), i);
+    consider(at_end(i), i);
   }
   // The earliest candidate within the margin of it (at the latest, in the piece that holds it).
-  const double bound = best.bottom + margin;
+  const double bound = lowest.bottom + margin;
   for (std::size_t i = 0; i <= lowest_piece; ++i) {
     if (ends[i + 1].starts_cover) continue;
-    const auto &a = ends[i], &b = ends[i + 1];
-    if (double o = value_before(a.first); o - a.w <= bound) return {o - a.w, a.tau, o, where(a.tau, a.above)};
-    if (const std::size_t k = offsets.earliest_at_most(a.first, a.last, slope(i), a.tau, bound + a.w); k != OffsetHistory::npos)
-      return {offsets.sloped(k, slope(i), a.tau) - a.w, offsets.time(k), offsets.low(k), where(offsets.time(k), a.above)};
-    if (double o = value_before(a.last); o - b.w <= bound) return {o - b.w, b.tau, o, where(b.tau, b.above)};
+    const CutPieceEnd& a = ends[i];
+    if (const LowestCut c = at_start(i); c.bottom <= bound) return c;
+    if (const std::size_t k = offsets.earliest_at_most(a.first, a.last, a.slope, a.tau, bound + a.w); k != OffsetHistory::npos) return at_change(i, k);
+    if (const LowestCut c = at_end(i); c.bottom <= bound) return c;
   }
-  // Rounding kept the lowest itself out of reach (sloped - w against bound + w): take it by value.
-  for (std::size_t i = 0; i + 1 < ends.size(); ++i) {
-    if (ends[i + 1].starts_cover) continue;
-    const auto& a = ends[i];
-    if (const std::size_t k = offsets.least(a.first, a.last, slope(i), a.tau); k != OffsetHistory::npos && offsets.sloped(k, slope(i), a.tau) - a.w <= bound)
-      return {offsets.sloped(k, slope(i), a.tau) - a.w, offsets.time(k), offsets.low(k), where(offsets.time(k), a.above)};
-  }
-  return best;
+  return lowest;  // rounding kept the lowest itself out of the search (sloped - w against bound + w)
+}
+
+// Whether the tool has reached none of the face's nodes by time t (`node_cut_time`: one per node of
+// the face's surface, +inf where never cut).
+inline bool face_uncut(const SurfacePoint& p, const Eigen::VectorXd& node_cut_time, double t) {
+  for (int i = 0; i < p.count; ++i)
+    if (!(node_cut_time[p.nodes[static_cast<std::size_t>(i)]] > t)) return false;
+  return true;
 }
 
 // path: waypoints x, y, z, program time. `cutting` (optional, one flag per segment i -> i + 1): only
