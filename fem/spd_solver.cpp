@@ -59,6 +59,8 @@ void SpdSolver::factorize(const Eigen::SparseMatrix<double>& K) {
     impl_->analyzed = true;
     impl_->size = K.rows();
     stats_.analyze_seconds += seconds_since(t0);
+    stats_.factor_flops = impl_->llt.cholmod().fl;
+    stats_.factor_nonzeros = impl_->llt.cholmod().lnz;
   }
   const auto t0 = std::chrono::steady_clock::now();
   impl_->llt.factorize(K);

@@ -12,6 +12,7 @@ namespace drom::fem {
 struct SolverStats {
   double analyze_seconds = 0, factorize_seconds = 0, solve_seconds = 0;
   std::size_t factor_peak_bytes = 0;  // CHOLMOD's own peak memory
+  double factor_flops = 0, factor_nonzeros = 0;  // of one numeric factorization of the analyzed pattern (CHOLMOD fl, lnz)
   int factorizations = 0;
 };
 

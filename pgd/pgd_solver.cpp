@@ -87,6 +87,8 @@ void PgdSolver::factorize(fem::SpdSolver& solver, const Eigen::SparseMatrix<doub
     solver.factorize(shifted);
     ++regularized_;
   }
+  factor_flops_ += solver.stats().factor_flops;
+  if (&solver == &update_solver_) update_factor_flops_ += solver.stats().factor_flops;
 }
 
 std::array<Eigen::VectorXd, 3> PgdSolver::plane_functions(const ComponentTensors& r, const Eigen::VectorXd& S_in) {
@@ -136,6 +138,7 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
   update_seconds_ = 0;
   factorizations_ = 0;
   regularized_ = 0;
+  factor_flops_ = update_factor_flops_ = 0;
   report = PgdReport{};
   const auto& grid = op_.grid();
   const Eigen::Index nz = grid.thickness_nodes();
@@ -248,6 +251,8 @@ SeparatedField PgdSolver::solve(const ComponentTensors& F, const SeparatedField*
   report.plane_solve_seconds = plane_seconds_;
   report.plane_factorizations = factorizations_;
   report.regularized_factorizations = regularized_;
+  report.factor_flops = factor_flops_;
+  report.update_factor_flops = update_factor_flops_;
   report.updates = updates_;
   report.update_seconds = update_seconds_;
   return u;

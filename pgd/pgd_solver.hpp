@@ -73,6 +73,9 @@ struct PgdReport {
   double update_seconds = 0;         // of which in the updates (included in plane_solve_seconds)
   int plane_factorizations = 0;      // 2D Cholesky factorizations (modes and updates)
   int regularized_factorizations = 0;  // of which needed a 1e-12 diagonal shift to be definite
+  // Floating-point work of those factorizations (CHOLMOD's count), all and the updates' alone: the
+  // figure to set against a 3D factorization's (fem::SolverStats::factor_flops).
+  double factor_flops = 0, update_factor_flops = 0;
   double seconds = 0, plane_solve_seconds = 0;
 };
 
@@ -97,6 +100,7 @@ class PgdSolver {
   double update_seconds_ = 0;
   double plane_seconds_ = 0;
   int factorizations_ = 0, regularized_ = 0;
+  double factor_flops_ = 0, update_factor_flops_ = 0;
   void factorize(fem::SpdSolver& solver, const Eigen::SparseMatrix<double>& K);
 };
 

@@ -239,4 +239,13 @@ TEST(PgdWarmStart, NextStationFromThePreviousMatchesAColdSolveForLessWork) {
   EXPECT_GT(w.warm_start_terms, 0);
   EXPECT_LT(w.plane_factorizations, c.plane_factorizations / 3);
   EXPECT_LT(difference, 1e-4);
+  // The work counts the bench compares with FE's: the updates' are part of all factorizations'. (Not
+  // asserted: that the warm start does less of it. Its fewer factorizations are the larger ones, the
+  // update over the previous station's functions plus the new: measured 6.3 against 5.8 GFlop.)
+  std::printf("factorization work: warm %.2f GFlop (updates %.2f), cold %.2f GFlop (updates %.2f)\n", w.factor_flops / 1e9, w.update_factor_flops / 1e9,
+              c.factor_flops / 1e9, c.update_factor_flops / 1e9);
+  for (const auto* r : {&w, &c}) {
+    EXPECT_GT(r->update_factor_flops, 0.0);
+    EXPECT_LT(r->update_factor_flops, r->factor_flops);
+  }
 }
