@@ -77,7 +77,17 @@ LowestCut lowest_cut(const std::vector<std::pair<double, double>>& covers, const
     const double o = value_before(a.last);
     return LowestCut{o - b.w, b.tau, o, where(b.tau, b.above)};
   };
-  // The lowest: at a piece's ends, and at the offset's changes inside it (its hull search).
+  // The lowest: at a piece's ends, and at the offset's changes inside it (its hull search). Every
+  // piece's ends first: the lowest of them bounds the searches, which then skip the blocks of changes
+  // that cannot go below it (most of them, where the offset moves one way across a cover).
+  double lowest_end = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i + 1 < ends.size(); ++i) {
+    if (ends[i + 1].starts_cover) continue;
+    CutPieceEnd &a = ends[i], &b = ends[i + 1];
+    std::tie(a.first, a.last) = offsets.inside(a.tau, b.tau);
+    a.slope = b.tau > a.tau ? (b.w - a.w) / (b.tau - a.tau) : 0.0;
+    lowest_end = std::min({lowest_end, at_start(i).bottom, at_end(i).bottom});
+  }
   LowestCut lowest;
   std::size_t lowest_piece = 0;
   auto consider = [&](const LowestCut& c, std::size_t i) {
@@ -85,11 +95,13 @@ LowestCut lowest_cut(const std::vector<std::pair<double, double>>& covers, const
   };
   for (std::size_t i = 0; i + 1 < ends.size(); ++i) {
     if (ends[i + 1].starts_cover) continue;
-    CutPieceEnd &a = ends[i], &b = ends[i + 1];
-    std::tie(a.first, a.last) = offsets.inside(a.tau, b.tau);
-    a.slope = b.tau > a.tau ? (b.w - a.w) / (b.tau - a.tau) : 0.0;
+    const CutPieceEnd& a = ends[i];
     consider(at_start(i), i);
-    if (const std::size_t k = offsets.least(a.first, a.last, a.slope, a.tau); k != OffsetHistory::npos) consider(at_change(i, k), i);
+    // A change is kept if it beats the lowest so far, so the search needs only those below the lowest
+    // end (with room for sloped - w rounding apart from the bound + w it is compared with).
+    const double below = std::min(lowest_end, lowest.bottom) + a.w;
+    if (const std::size_t k = offsets.least(a.first, a.last, a.slope, a.tau, below + 1e-9 * (1 + std::abs(below))); k != OffsetHistory::npos)
+      consider(at_change(i, k), i);
     consider(at_end(i), i);
   }
   // The earliest candidate within the margin of it (at the latest, in the piece that holds it).

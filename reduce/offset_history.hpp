@@ -36,16 +36,26 @@ class OffsetHistory {
   double low(std::size_t k) const { return low_[k]; }  // the lower of the values either side of change k
   // low(k) - m (time(k) - a), the quantity both searches below compare.
   double sloped(std::size_t k, double m, double a) const { return low_[k] - m * (time_[k] - a); }
-  // Over k in [first, last): the k of the least sloped(k, m, a) (npos if the range is empty) ...
-  std::size_t least(std::size_t first, std::size_t last, double m, double a) const;
+  // Over k in [first, last): the k of the least sloped(k, m, a) (npos if the range is empty); with
+  // `below`, npos also when that least is not below it, which lets whole blocks be skipped on their
+  // minimum without a hull search (a caller that already holds a lower candidate elsewhere) ...
+  std::size_t least(std::size_t first, std::size_t last, double m, double a, double below = kNoBound) const;
   // ... and the earliest k with sloped(k, m, a) <= bound (npos if none).
   std::size_t earliest_at_most(std::size_t first, std::size_t last, double m, double a, double bound) const;
+  static constexpr double kNoBound = 1e300;
 
  private:
   static constexpr int kBaseLevel = 3;  // blocks of fewer than 8 changes are scanned
   void reindex_from(std::size_t k);
+  // The first k with !before(time(k)) (before true on a prefix of the times), searched from where t
+  // falls if the changes were evenly spread.
+  template <class Before>
+  std::size_t partition_near(double t, Before before) const;
   void build_block(int level, std::size_t block);
   std::size_t block_least(int level, std::size_t block, double m) const;
+  // A lower bound of sloped(k, m, a) over the block, from its least low and its time span: a block
+  // above what the search needs is skipped without its hull search.
+  double block_floor(int level, std::size_t block, double m, double a) const;
   std::size_t block_earliest(int level, std::size_t block, double m, double a, double bound) const;
   // Calls visit(level, block) for the aligned blocks tiling [first, last), in time order, with
   // level -1 for a single change.
@@ -58,6 +68,7 @@ class OffsetHistory {
   // hull_[l][start_[l][b] .. start_[l][b + 1]), change indices in time order.
   std::vector<std::vector<std::uint32_t>> hull_;  // 32-bit: a run's history is some 1e5-1e6 changes
   std::vector<std::vector<std::size_t>> start_;
+  std::vector<std::vector<double>> block_low_;  // per level and block: the least low in it
 };
 
 }  // namespace drom::reduce

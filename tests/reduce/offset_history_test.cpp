@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -52,12 +53,40 @@ TEST(OffsetHistory, HullSearchesMatchAScan) {
       }
       ASSERT_NE(least, OffsetHistory::npos);
       EXPECT_NEAR(h.sloped(least, m, a), h.sloped(scan, m, a), 1e-15) << "query " << q;
+      // With a bound the least must be below: the same change when it is (blocks skipped on their
+      // floor must not change which of tied changes wins), none when it is not.
+      for (const double shift : {-1e-3, -1e-12, 0.0, 1e-12, 1e-3 * u(rng)}) {
+        const double below = h.sloped(scan, m, a) + shift;
+        EXPECT_EQ(h.least(first, last, m, a, below), h.sloped(least, m, a) < below ? least : OffsetHistory::npos) << "query " << q << " shift " << shift;
+      }
       // The earliest within a bound above the least.
       const double bound = h.sloped(scan, m, a) + (q % 3 == 0 ? 0.0 : 1e-3 * u(rng));
       std::size_t earliest = OffsetHistory::npos;
       for (std::size_t k = first; k < last && earliest == OffsetHistory::npos; ++k)
         if (h.sloped(k, m, a) <= bound) earliest = k;
       EXPECT_EQ(h.earliest_at_most(first, last, m, a, bound), earliest) << "query " << q;
+    }
+  }
+}
+
+TEST(OffsetHistory, InsideFindsTheChangesStrictlyBetweenTwoTimesHoweverTheyAreSpread) {
+  // The search starts where a time would fall if the changes were evenly spread: check it on changes
+  // bunched at the start (t = i^3) and at the end (t = i^(1/3)), so that the first guess falls short
+  // and overshoots, with times before, after, between and exactly at changes.
+  for (const double power : {3.0, 1.0 / 3.0}) {
+    OffsetHistory h;
+    std::vector<double> times;
+    for (int i = 1; i <= 400; ++i) times.push_back(64 * std::pow(i / 400.0, power)), h.set(times.back(), i % 2 ? 0.01 * i : -0.01 * i);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-0.1, 1.1);
+    std::uniform_int_distribution<std::size_t> pick(0, times.size() - 1);
+    for (int q = 0; q < 5000; ++q) {
+      double a = q % 4 == 0 ? times[pick(rng)] : 64 * u(rng) * u(rng);
+      double b = q % 3 == 0 ? times[pick(rng)] : 64 * u(rng);
+      if (a > b) std::swap(a, b);
+      const auto first = static_cast<std::size_t>(std::upper_bound(times.begin(), times.end(), a) - times.begin());
+      const auto last = std::max(first, static_cast<std::size_t>(std::lower_bound(times.begin(), times.end(), b) - times.begin()));
+      ASSERT_EQ(h.inside(a, b), std::make_pair(first, last)) << "power " << power << " a " << a << " b " << b;
     }
   }
 }
