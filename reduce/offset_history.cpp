@@ -87,7 +87,7 @@ std::size_t OffsetHistory::partition_near(double t, Before before) const {
   const std::size_t n = time_.size();
   if (n == 0) return 0;
   const double span = time_.back() - time_.front();
-  const double where = span > 0 ? std::clamp((t - time_.front()) / span, 0.0, 1.0) : 0.0;
+  const double where = span > 0 && std::isfinite(t) ? std::clamp((t - time_.front()) / span, 0.0, 1.0) : 0.0;  // no cast of a NaN
   const auto guess = std::min(n - 1, static_cast<std::size_t>(where * static_cast<double>(n - 1)));
   std::size_t lo, hi;  // before(lo) (or lo = begin) and !before(hi) (or hi = n): the answer is in (lo, hi]
   auto at = [&](std::size_t k) { return time_.begin() + static_cast<std::ptrdiff_t>(k); };
