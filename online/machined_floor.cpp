@@ -13,7 +13,7 @@ MachinedFloor::MachinedFloor(const reduce::LightModel& model)
               model.target.node_count() > 0 ? model.target.nodes().row(2).maxCoeff() + 0.02 * model.pocket_depth : 0.0) {}
 
 void MachinedFloor::command(double t, double offset) {
-  if (offsets_.size() > 0 && t < offsets_.steps().back().first) throw std::invalid_argument("MachinedFloor: offsets must be commanded in time order");
+  if (offsets_.size() > 0 && t < offsets_.time(offsets_.size() - 1)) throw std::invalid_argument("MachinedFloor: offsets must be commanded in time order");
   offsets_.set(t, offset);
 }
 

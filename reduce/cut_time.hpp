@@ -62,10 +62,9 @@ LowestCut lowest_cut(const std::vector<std::pair<double, double>>& covers, const
   for (auto& e : ends) e.w = w_at(e.tau, where(e.tau, e.above));
   // A piece's candidates: its start (the offset in force there), a change inside it (its lower
   // value), its end (the offset in force just before it).
-  auto value_before = [&](std::size_t k) { return k > 0 ? offsets.value(k - 1) : 0.0; };
   auto at_start = [&](std::size_t i) {
     const CutPieceEnd& a = ends[i];
-    const double o = value_before(a.first);
+    const double o = offsets.value_before(a.first);
     return LowestCut{o - a.w, a.tau, o, where(a.tau, a.above)};
   };
   auto at_change = [&](std::size_t i, std::size_t k) {
@@ -74,7 +73,7 @@ LowestCut lowest_cut(const std::vector<std::pair<double, double>>& covers, const
   };
   auto at_end = [&](std::size_t i) {
     const CutPieceEnd &a = ends[i], &b = ends[i + 1];
-    const double o = value_before(a.last);
+    const double o = offsets.value_before(a.last);
     return LowestCut{o - b.w, b.tau, o, where(b.tau, b.above)};
   };
   // The lowest: at a piece's ends, and at the offset's changes inside it (its hull search). Every

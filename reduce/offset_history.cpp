@@ -7,28 +7,23 @@
 
 namespace drom::reduce {
 
-double step_value(const StepFunction& steps, double t) {
-  const auto it = std::upper_bound(steps.begin(), steps.end(), t, [](double v, const auto& e) { return v < e.first; });
-  return it == steps.begin() ? 0.0 : std::prev(it)->second;
-}
+std::size_t OffsetHistory::changes_up_to(double t) const { return static_cast<std::size_t>(std::upper_bound(time_.begin(), time_.end(), t) - time_.begin()); }
 
 void OffsetHistory::set(double t, double value) {
-  if (at(t) == value) return;
-  if (steps_.size() >= std::numeric_limits<std::uint32_t>::max()) throw std::length_error("offset history: more than 2^32 changes");
   // After any change at the same time, so that the latest setting wins.
-  const auto it = std::upper_bound(steps_.begin(), steps_.end(), t, [](double v, const auto& e) { return v < e.first; });
-  const auto k = static_cast<std::size_t>(it - steps_.begin());
-  steps_.emplace(it, t, value);
+  const std::size_t k = changes_up_to(t);
+  if (value_before(k) == value) return;
+  if (time_.size() >= std::numeric_limits<std::uint32_t>::max()) throw std::length_error("offset history: more than 2^32 changes");
+  const auto at = static_cast<std::ptrdiff_t>(k);
+  time_.insert(time_.begin() + at, t);
+  value_.insert(value_.begin() + at, value);
   reindex_from(k);
 }
 
 void OffsetHistory::reindex_from(std::size_t k) {
-  const std::size_t n = steps_.size();
-  time_.resize(n), low_.resize(n);
-  for (std::size_t j = k; j < n; ++j) {
-    time_[j] = steps_[j].first;
-    low_[j] = std::min(j > 0 ? steps_[j - 1].second : 0.0, steps_[j].second);
-  }
+  const std::size_t n = time_.size();
+  low_.resize(n);
+  for (std::size_t j = k; j < n; ++j) low_[j] = std::min(value_before(j), value_[j]);
   // Blocks that reach change k or later are stale; the rest stand.
   for (std::size_t level = 0; level < hull_.size(); ++level) {
     const std::size_t keep = k >> (level + kBaseLevel);

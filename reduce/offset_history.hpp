@@ -14,10 +14,7 @@
 
 namespace drom::reduce {
 
-// A step function of time: (time, value from then on), times increasing; 0 before the first.
-using StepFunction = std::vector<std::pair<double, double>>;
-double step_value(const StepFunction& steps, double t);
-
+// A step function of time: changes (time, value from then on), times increasing; 0 before the first.
 class OffsetHistory {
  public:
   static constexpr std::size_t npos = static_cast<std::size_t>(-1);
@@ -25,14 +22,14 @@ class OffsetHistory {
   // The value from t on; nothing if it is already the value at t. Appending is amortized O(log n); a
   // t before the last change re-indexes the changes after it.
   void set(double t, double value);
-  double at(double t) const { return step_value(steps_, t); }
-  const StepFunction& steps() const { return steps_; }
-  std::size_t size() const { return steps_.size(); }
+  double at(double t) const { return value_before(changes_up_to(t)); }
+  std::size_t size() const { return time_.size(); }
 
   // Changes k with a < time(k) < b, as the index range [first, last).
   std::pair<std::size_t, std::size_t> inside(double a, double b) const;
   double time(std::size_t k) const { return time_[k]; }
-  double value(std::size_t k) const { return steps_[k].second; }
+  double value(std::size_t k) const { return value_[k]; }
+  double value_before(std::size_t k) const { return k > 0 ? value_[k - 1] : 0.0; }  // in force just before change k
   double low(std::size_t k) const { return low_[k]; }  // the lower of the values either side of change k
   // low(k) - m (time(k) - a), the quantity both searches below compare.
   double sloped(std::size_t k, double m, double a) const { return low_[k] - m * (time_[k] - a); }
@@ -46,6 +43,7 @@ class OffsetHistory {
 
  private:
   static constexpr int kBaseLevel = 3;  // blocks of fewer than 8 changes are scanned
+  std::size_t changes_up_to(double t) const;  // how many changes are at or before t
   void reindex_from(std::size_t k);
   // The first k with !before(time(k)) (before true on a prefix of the times), searched from where t
   // falls if the changes were evenly spread.
@@ -62,8 +60,7 @@ class OffsetHistory {
   template <class Visit>
   void tile(std::size_t first, std::size_t last, Visit&& visit) const;
 
-  StepFunction steps_;
-  std::vector<double> time_, low_;
+  std::vector<double> time_, value_, low_;
   // Per level l >= kBaseLevel (index l - kBaseLevel): the hull of block b is
   // hull_[l][start_[l][b] .. start_[l][b + 1]), change indices in time order.
   std::vector<std::vector<std::uint32_t>> hull_;  // 32-bit: a run's history is some 1e5-1e6 changes
