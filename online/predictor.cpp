@@ -98,6 +98,7 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
 void Predictor::enter_face(InstantCache& cache, const reduce::SurfacePoint& p, const reduce::TimeInterval& now, FaceMemo& memo) {
   memo.face = p.face;
   memo.w.clear();
+  for (auto& c : memo.cut) c.instant = -1;
   memo.rows_now.setZero(p.count, r_);
   if (r_ == 0) return;
   const Eigen::Index next = now.i + (model_.histories.front().times().size() > 1 ? 1 : 0);
@@ -122,12 +123,33 @@ void Predictor::FaceMemo::row_at(const reduce::SurfacePoint& p, double* out) con
 }
 
 const double* Predictor::face_w(FaceMemo& memo, const reduce::SurfacePoint& p, Eigen::Index j, const Eigen::VectorXd& alpha) {
-  for (const auto& [instant, w] : memo.w)
-    if (instant == j) return w.data();
+  for (auto it = memo.w.rbegin(); it != memo.w.rend(); ++it)  // the latest first: a face's points mostly ask for the same few
+    if (it->first == j) return it->second.data();
   auto& [instant, w] = memo.w.emplace_back();
   instant = j;
   for (int q = 0; q < p.count; ++q) w[static_cast<std::size_t>(q)] = Eigen::Map<const Eigen::VectorXd>(target_cache_.at(p.nodes[static_cast<std::size_t>(q)], j), r_).dot(alpha);
   return w.data();
+}
+
+const Predictor::FaceMemo::CutRows& Predictor::cut_rows(FaceMemo& memo, const reduce::SurfacePoint& p, Eigen::Index i) {
+  for (const auto& c : memo.cut)
+    if (c.instant == i) return c;
+  auto& c = memo.cut[memo.older];
+  memo.older = 1 - memo.older;
+  c.instant = i;
+  c.since.resize(p.count, r_);
+  c.step.resize(p.count, r_);
+  const Eigen::Index next = i + (model_.histories.front().times().size() > 1 ? 1 : 0);
+  for (int q = 0; q < p.count; ++q) {
+    const int node = p.nodes[static_cast<std::size_t>(q)];
+    const double* a = target_cache_.at(node, i);
+    const double* b = target_cache_.at(node, next);
+    const double* now = memo.rows_now.row(q).data();
+    double* since = c.since.row(q).data();
+    double* step = c.step.row(q).data();
+    for (int k = 0; k < r_; ++k) since[k] = now[k] - a[k], step[k] = b[k] - a[k];
+  }
+  return c;
 }
 
 void Predictor::InstantCache::reset(const std::vector<reduce::SpaceTimeField>& h, int nodes) {
@@ -177,7 +199,6 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
   const Eigen::VectorXd no_instants;
   const Eigen::VectorXd& instants = r_ > 0 ? model_.histories.front().times() : no_instants;
   const reduce::TimeInterval now = reduce::locate_time(instants, t);
-  const bool one_instant = instants.size() < 2;
   if (G_.rows() < static_cast<Eigen::Index>(points.size())) {
     G_.resize(static_cast<Eigen::Index>(points.size()), r_);
     m_.resize(static_cast<Eigen::Index>(points.size()));
@@ -255,20 +276,17 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
             return at.weight == 0 ? a : (1 - at.weight) * a + at.weight * w_instant(at.i + 1);
           },
           candidates_, 1e-12);
+      // g = sum_q N_q (U1(t) - U1(i) - c (U1(i + 1) - U1(i))) at the face's nodes, c the cut's weight in (i, i + 1).
       double* g = G_.row(used).data();
-      floor_memo_.row_at(*p, g);
+      std::fill(g, g + r_, 0.0);
       if (r_ > 0) {
-        const Eigen::Index next = cut.at.i + (one_instant ? 0 : 1);
+        const FaceMemo::CutRows& rows = cut_rows(floor_memo_, *p, cut.at.i);
+        const double c = cut.at.weight;
         for (int q = 0; q < p->count; ++q) {
-          const int node = p->nodes[static_cast<std::size_t>(q)];
-          const double ca = p->weights[static_cast<std::size_t>(q)] * (1 - cut.at.weight), cb = p->weights[static_cast<std::size_t>(q)] * cut.at.weight;
-          const double* a = target_cache_.at(node, cut.at.i);
-          if (cb == 0) {  // at an instant (most cuts): no need for the next one
-            for (int k = 0; k < r_; ++k) g[k] -= ca * a[k];
-            continue;
-          }
-          const double* b = target_cache_.at(node, next);
-          for (int k = 0; k < r_; ++k) g[k] -= ca * a[k] + cb * b[k];
+          const double N = p->weights[static_cast<std::size_t>(q)], Nc = N * c;
+          const double* since = rows.since.row(q).data();
+          const double* step = rows.step.row(q).data();
+          for (int k = 0; k < r_; ++k) g[k] += N * since[k] - Nc * step[k];
         }
       }
       keep(pt.z - (s0 + cut.offset), 1.0, alpha);

@@ -172,12 +172,23 @@ class Predictor {
     int face = -1;
     RowMatrix rows_now;
     std::vector<std::pair<Eigen::Index, std::array<double, 9>>> w;
+    // The face's nodes' differenced rows for a cut in (instant i, i + 1): U1(t) - U1(i) and
+    // U1(i + 1) - U1(i). The points of a face that one cover cut mostly share i, so a point's row is
+    // one blend of these instead of three of the per-node cache's.
+    struct CutRows {
+      Eigen::Index instant = -1;
+      RowMatrix since, step;
+    };
+    std::array<CutRows, 2> cut;  // the two instants asked for last (a face under two passes' cuts)
+    std::size_t older = 0;
     // sum_q N_q U1(node_q, t) at a point of the face: its row at the profile's time.
     void row_at(const reduce::SurfacePoint& p, double* out) const;
   };
   void enter_face(InstantCache& cache, const reduce::SurfacePoint& p, const reduce::TimeInterval& now, FaceMemo& memo);
   // w at the face's nodes at instant j for the fit alpha (target surface); valid until the next call.
   const double* face_w(FaceMemo& memo, const reduce::SurfacePoint& p, Eigen::Index j, const Eigen::VectorXd& alpha);
+  // The face's differenced rows for a cut between instants i and i + 1 (target surface).
+  const FaceMemo::CutRows& cut_rows(FaceMemo& memo, const reduce::SurfacePoint& p, Eigen::Index i);
   std::vector<std::pair<double, double>> covers_;
   std::vector<reduce::CutPieceEnd> candidates_;
   InstantCache target_cache_, top_cache_;

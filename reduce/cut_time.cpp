@@ -28,35 +28,6 @@ double segment_cover_time(const Eigen::MatrixXd& path, Eigen::Index i, const Eig
   return path(i, 3) + lambda * (path(i + 1, 3) - path(i, 3));
 }
 
-// The stretch of segment i, as program times (entry, exit), during which the tool covers `point`
-// with its tip down; false if none.
-bool segment_cover(const Eigen::MatrixXd& path, Eigen::Index i, const Eigen::Vector3d& point, double radius, double z_tolerance, double& entry, double& exit) {
-  const double za = path(i, 2), zb = path(i + 1, 2), z_top = point.z() + z_tolerance;
-  if (std::min(za, zb) > z_top) return false;
-  const Eigen::Vector2d a = path.row(i).head<2>().transpose(), b = path.row(i + 1).head<2>().transpose(), p = point.head<2>();
-  const Eigen::Vector2d d = b - a, f = a - p;
-  const double A = d.squaredNorm(), B = 2 * f.dot(d), C = f.squaredNorm() - radius * radius;
-  double lo = 0, hi = 1;
-  if (A == 0) {
-    if (C > 0) return false;
-  } else {
-    const double disc = B * B - 4 * A * C;
-    if (disc < 0) return false;
-    lo = std::max(lo, (-B - std::sqrt(disc)) / (2 * A));
-    hi = std::min(hi, (-B + std::sqrt(disc)) / (2 * A));
-  }
-  // Where the tip is down (z linear along the segment).
-  if (za != zb) {
-    const double l = (z_top - za) / (zb - za);
-    if (zb > za) hi = std::min(hi, l);
-    else lo = std::max(lo, l);
-  }
-  if (lo > hi) return false;
-  entry = path(i, 3) + lo * (path(i + 1, 3) - path(i, 3));
-  exit = path(i, 3) + hi * (path(i + 1, 3) - path(i, 3));
-  return true;
-}
-
 }  // namespace
 
 double first_cover_time(const Eigen::MatrixXd& path, const std::vector<char>& cutting, const Eigen::Vector3d& point, double radius, double z_tolerance) {
@@ -74,6 +45,11 @@ CutTimeIndex::CutTimeIndex(const Eigen::MatrixXd& path, double radius, double z_
   for (Eigen::Index i = 0; i + 1 < path.rows(); ++i)
     if (std::min(path(i, 2), path(i + 1, 2)) <= z_max) low.push_back(i);
   if (low.empty()) return;
+  segments_.resize(static_cast<std::size_t>(path.rows() - 1));
+  for (Eigen::Index i : low) {
+    const double dx = path(i + 1, 0) - path(i, 0), dy = path(i + 1, 1) - path(i, 1);
+    segments_[static_cast<std::size_t>(i)] = {path(i, 0), path(i, 1), dx, dy, dx * dx + dy * dy, path(i, 2), path(i + 1, 2), path(i, 3), path(i + 1, 3)};
+  }
   double x1 = -1e300, y1 = -1e300;
   x0_ = y0_ = 1e300;
   for (Eigen::Index i : low)
@@ -117,11 +93,32 @@ void CutTimeIndex::covers(const Eigen::Vector3d& point, double until, std::vecto
   out.clear();
   const int i = static_cast<int>(std::floor((point.x() - x0_) / cell_)), j = static_cast<int>(std::floor((point.y() - y0_) / cell_));
   if (buckets_.empty() || i < 0 || j < 0 || i >= nx_ || j >= ny_) return;
+  const double z_top = point.z() + z_tolerance_, r2 = radius_ * radius_;
   for (int s : buckets_[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)]) {
-    if (path_(s, 3) > until) break;  // a bucket's segments come in time order
-    double entry, exit;
-    if (!segment_cover(path_, s, point, radius_, z_tolerance_, entry, exit) || entry > until) continue;
-    out.emplace_back(entry, std::min(exit, until));
+    // segment_cover's arithmetic, on the segment's compact copy.
+    const Segment& g = segments_[static_cast<std::size_t>(s)];
+    if (g.t0 > until) break;  // a bucket's segments come in time order
+    if (std::min(g.za, g.zb) > z_top) continue;
+    const double fx = g.ax - point.x(), fy = g.ay - point.y();
+    const double B = 2 * (fx * g.dx + fy * g.dy), C = fx * fx + fy * fy - r2;
+    double lo = 0, hi = 1;
+    if (g.A == 0) {
+      if (C > 0) continue;
+    } else {
+      const double disc = B * B - 4 * g.A * C;
+      if (disc < 0) continue;
+      lo = std::max(lo, (-B - std::sqrt(disc)) / (2 * g.A));
+      hi = std::min(hi, (-B + std::sqrt(disc)) / (2 * g.A));
+    }
+    if (g.za != g.zb) {
+      const double l = (z_top - g.za) / (g.zb - g.za);
+      if (g.zb > g.za) hi = std::min(hi, l);
+      else lo = std::max(lo, l);
+    }
+    if (lo > hi) continue;
+    const double entry = g.t0 + lo * (g.t1 - g.t0);
+    if (entry > until) continue;
+    out.emplace_back(entry, std::min(g.t0 + hi * (g.t1 - g.t0), until));
   }
 }
 

@@ -31,6 +31,8 @@ struct CutPieceEnd {
   bool starts_cover = false;
   std::size_t first = 0, last = 0;  // the offset's changes inside the piece that starts here
   double slope = 0;                 // and w's slope over it
+  double start_bottom = 0, end_bottom = 0;  // the piece's candidates at its ends
+  double change_floor = 0;                  // no change inside the piece has a bottom below this
 };
 
 // Of the tool's covers of a point (entry, exit), the cut with the lowest bottom in the material's
@@ -79,13 +81,16 @@ LowestCut lowest_cut(const std::vector<std::pair<double, double>>& covers, const
   // The lowest: at a piece's ends, and at the offset's changes inside it (its hull search). Every
   // piece's ends first: the lowest of them bounds the searches, which then skip the blocks of changes
   // that cannot go below it (most of them, where the offset moves one way across a cover).
+  // The ends' bottoms are kept: the two passes below compare them again.
   double lowest_end = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i + 1 < ends.size(); ++i) {
     if (ends[i + 1].starts_cover) continue;
     CutPieceEnd &a = ends[i], &b = ends[i + 1];
     std::tie(a.first, a.last) = offsets.inside(a.tau, b.tau);
     a.slope = b.tau > a.tau ? (b.w - a.w) / (b.tau - a.tau) : 0.0;
-    lowest_end = std::min({lowest_end, at_start(i).bottom, at_end(i).bottom});
+    a.start_bottom = offsets.value_before(a.first) - a.w;
+    a.end_bottom = offsets.value_before(a.last) - b.w;
+    lowest_end = std::min({lowest_end, a.start_bottom, a.end_bottom});
   }
   LowestCut lowest;
   std::size_t lowest_piece = 0;
@@ -94,23 +99,33 @@ LowestCut lowest_cut(const std::vector<std::pair<double, double>>& covers, const
   };
   for (std::size_t i = 0; i + 1 < ends.size(); ++i) {
     if (ends[i + 1].starts_cover) continue;
-    const CutPieceEnd& a = ends[i];
-    consider(at_start(i), i);
+    CutPieceEnd& a = ends[i];
+    if (a.start_bottom < lowest.bottom) lowest = at_start(i), lowest_piece = i;
     // A change is kept if it beats the lowest so far, so the search needs only those below the lowest
     // end (with room for sloped - w rounding apart from the bound + w it is compared with).
     const double below = std::min(lowest_end, lowest.bottom) + a.w;
-    if (const std::size_t k = offsets.least(a.first, a.last, a.slope, a.tau, below + 1e-9 * (1 + std::abs(below))); k != OffsetHistory::npos)
-      consider(at_change(i, k), i);
-    consider(at_end(i), i);
+    const double slack = 1e-9 * (1 + std::abs(below));
+    if (const std::size_t k = offsets.least(a.first, a.last, a.slope, a.tau, below + slack); k != OffsetHistory::npos) {
+      const LowestCut c = at_change(i, k);
+      a.change_floor = c.bottom;
+      consider(c, i);
+    } else {
+      a.change_floor = below + slack - a.w;  // none of its changes came below that
+    }
+    if (a.end_bottom < lowest.bottom) lowest = at_end(i), lowest_piece = i;
   }
-  // The earliest candidate within the margin of it (at the latest, in the piece that holds it).
+  // The earliest candidate within the margin of it (at the latest, in the piece that holds it). A
+  // piece whose changes all stayed clear above the bound (by more than the rounding of the bottoms)
+  // is not searched again.
   const double bound = lowest.bottom + margin;
+  const double rounding = 1e-12 * (1 + std::abs(bound));
   for (std::size_t i = 0; i <= lowest_piece; ++i) {
     if (ends[i + 1].starts_cover) continue;
     const CutPieceEnd& a = ends[i];
-    if (const LowestCut c = at_start(i); c.bottom <= bound) return c;
-    if (const std::size_t k = offsets.earliest_at_most(a.first, a.last, a.slope, a.tau, bound + a.w); k != OffsetHistory::npos) return at_change(i, k);
-    if (const LowestCut c = at_end(i); c.bottom <= bound) return c;
+    if (a.start_bottom <= bound) return at_start(i);
+    if (a.change_floor - rounding <= bound)
+      if (const std::size_t k = offsets.earliest_at_most(a.first, a.last, a.slope, a.tau, bound + a.w); k != OffsetHistory::npos) return at_change(i, k);
+    if (a.end_bottom <= bound) return at_end(i);
   }
   return lowest;  // rounding kept the lowest itself out of the search (sloped - w against bound + w)
 }
@@ -141,6 +156,13 @@ class CutTimeIndex {
 
  private:
   Eigen::MatrixXd path_;
+  // Each low segment as covers() reads it: contiguous, a line or two per candidate instead of the
+  // path matrix's scattered columns.
+  struct Segment {
+    double ax = 0, ay = 0, dx = 0, dy = 0, A = 0;  // start, direction, |direction|^2
+    double za = 0, zb = 0, t0 = 0, t1 = 0;         // tip altitudes and program times at its ends
+  };
+  std::vector<Segment> segments_;
   double radius_ = 0, z_tolerance_ = 0;
   double x0_ = 0, y0_ = 0, cell_ = 1;
   int nx_ = 0, ny_ = 0;
