@@ -1,5 +1,6 @@
 // drom: distortion-aware machining of thin parts. See README.md and docs/.
 #include "apps/commands.hpp"
+#include "support/heap_policy.hpp"
 #include "support/input_error.hpp"
 
 #include <CLI/CLI.hpp>
@@ -7,6 +8,9 @@
 #include <iostream>
 
 int main(int argc, char** argv) {
+  // First, before any thread has an arena of its own: the station solves' large blocks are kept and
+  // reused rather than mapped and faulted in again (support/heap_policy.hpp).
+  drom::keep_freed_memory();
   CLI::App app{"drom: predicts and corrects the distortion of thin parts while they are machined"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "drom 0.1.0");
