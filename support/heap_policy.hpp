@@ -8,7 +8,7 @@
 // workers then queue on the process's memory-map lock. Measured on the flat plate at the case's
 // scale with the PGD (`drom offline --set solver.kind=pgd --set mesh.element=hex27`, two workers,
 // first two stations): 21 million page faults and 82 s of system time in 3 min 56 s; with this
-// policy 2 million, 23 s, and 3 min 18 s, for a peak RSS of 8.3 GB instead of 6.8 GB.
+// policy 2.1 million, 24 s, and 3 min 12 s, for a peak RSS of 8.5 GB instead of 6.8 GB.
 namespace drom {
 
 // From here on (process-wide): large blocks from the heap, not from mmap; one arena, so that a
