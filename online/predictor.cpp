@@ -101,7 +101,7 @@ void Predictor::enter_face(InstantCache& cache, const reduce::SurfacePoint& p, c
   for (auto& c : memo.cut) c.instant = -1;
   memo.rows_now.setZero(p.count, r_);
   if (r_ == 0) return;
-  const Eigen::Index next = now.i + (model_.histories.front().times().size() > 1 ? 1 : 0);
+  const Eigen::Index next = next_instant(now.i);
   for (int q = 0; q < p.count; ++q) {
     const int node = p.nodes[static_cast<std::size_t>(q)];
     const double* a = cache.at(node, now.i);
@@ -131,6 +131,8 @@ const double* Predictor::face_w(FaceMemo& memo, const reduce::SurfacePoint& p, E
   return w.data();
 }
 
+Eigen::Index Predictor::next_instant(Eigen::Index i) const { return i + (model_.histories.front().times().size() > 1 ? 1 : 0); }
+
 const Predictor::FaceMemo::CutRows& Predictor::cut_rows(FaceMemo& memo, const reduce::SurfacePoint& p, Eigen::Index i) {
   for (const auto& c : memo.cut)
     if (c.instant == i) return c;
@@ -139,7 +141,7 @@ const Predictor::FaceMemo::CutRows& Predictor::cut_rows(FaceMemo& memo, const re
   c.instant = i;
   c.since.resize(p.count, r_);
   c.step.resize(p.count, r_);
-  const Eigen::Index next = i + (model_.histories.front().times().size() > 1 ? 1 : 0);
+  const Eigen::Index next = next_instant(i);
   for (int q = 0; q < p.count; ++q) {
     const int node = p.nodes[static_cast<std::size_t>(q)];
     const double* a = target_cache_.at(node, i);

@@ -184,6 +184,9 @@ class Predictor {
     // sum_q N_q U1(node_q, t) at a point of the face: its row at the profile's time.
     void row_at(const reduce::SurfacePoint& p, double* out) const;
   };
+  // The stored instant after i, the other end of a blend between instants (i itself when the model
+  // has a single instant).
+  Eigen::Index next_instant(Eigen::Index i) const;
   void enter_face(InstantCache& cache, const reduce::SurfacePoint& p, const reduce::TimeInterval& now, FaceMemo& memo);
   // w at the face's nodes at instant j for the fit alpha (target surface); valid until the next call.
   const double* face_w(FaceMemo& memo, const reduce::SurfacePoint& p, Eigen::Index j, const Eigen::VectorXd& alpha);

@@ -95,7 +95,8 @@ void CutTimeIndex::covers(const Eigen::Vector3d& point, double until, std::vecto
   if (buckets_.empty() || i < 0 || j < 0 || i >= nx_ || j >= ny_) return;
   const double z_top = point.z() + z_tolerance_, r2 = radius_ * radius_;
   for (int s : buckets_[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)]) {
-    // segment_cover's arithmetic, on the segment's compact copy.
+    // The stretch of the segment during which the tool covers the point with its tip down: within
+    // the radius (a quadratic in the segment's parameter), and where the tip is below z_top.
     const Segment& g = segments_[static_cast<std::size_t>(s)];
     if (g.t0 > until) break;  // a bucket's segments come in time order
     if (std::min(g.za, g.zb) > z_top) continue;

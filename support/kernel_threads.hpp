@@ -7,8 +7,9 @@
 // wake: measured on the 2-core machine, two thirds of a PGD solve went to sched_yield and futex waits.
 // OMP_NUM_THREADS cannot undo an explicit num_threads clause, but a zero max-active-levels makes every
 // parallel region run on the calling thread. libgomp keeps max-active-levels per thread (a new
-// std::thread starts from the default), so every thread that solves must hold its own scope. Both libraries are reached through dlsym, so nothing
-// breaks when another BLAS or a CHOLMOD without OpenMP is linked.
+// std::thread starts from the default), so every thread that solves must hold its own scope. Both
+// libraries are reached through dlsym, so nothing breaks when another BLAS or a CHOLMOD without
+// OpenMP is linked.
 namespace drom {
 
 class SingleThreadedKernels {
