@@ -131,6 +131,7 @@ void AddProfile(benchmark::State& state) {
     ++i;
   }
   state.counters["points_used_per_profile"] = static_cast<double>(used) / static_cast<double>(state.iterations());
+  state.counters["learned"] = predictor->estimate().learned ? 1 : 0;
 }
 
 void ToolOffset(benchmark::State& state) {
