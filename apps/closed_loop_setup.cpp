@@ -13,6 +13,7 @@
 #include <cmath>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <tuple>
 
 namespace drom::app {
@@ -30,15 +31,15 @@ namespace {
 const std::vector<std::string> kLoopTables = {"sensor", "sync", "control", "run"};
 const std::vector<std::string> kPathKeys = {"part.stl", "stress.table", "truth.table", "path.gcode"};
 
-// Runs `command` (offline or truth) on `text` in `dir` unless dir/database.h5 already holds it.
-// Returns the seconds spent, or -1 when reused.
-double run_stage(int (*command)(const CommandOptions&), const std::string& text, const std::filesystem::path& dir, const CommandOptions& options) {
+// The options of a stage (offline or truth) on `text` in `dir`, or none when dir/database.h5 already
+// holds it.
+std::optional<CommandOptions> stage_to_run(const std::string& text, const std::filesystem::path& dir, const CommandOptions& options) {
   const auto case_file = dir / "case.toml";
   const auto database = dir / "database.h5";
   const std::string resolved = case_from_text(text, case_file.string()).resolved_toml;
   if (std::filesystem::exists(database)) {
     const Hdf5Reader db(database);
-    if (db.text_attribute("case") == resolved && db.has("B1_top")) return -1;  // (databases before B1_top: recompute)
+    if (db.text_attribute("case") == resolved && db.has("B1_top")) return std::nullopt;  // (databases before B1_top: recompute)
     std::filesystem::remove(database);  // made by another case: recompute
   }
   std::filesystem::create_directories(dir);
@@ -50,9 +51,18 @@ double run_stage(int (*command)(const CommandOptions&), const std::string& text,
   stage.threads = options.threads;
   stage.frames = 0;
   stage.resume = std::filesystem::exists(dir / ".checkpoint");
+  return stage;
+}
+
+// Runs the stages (through `command`, given their options), and checks each wrote its database.
+// Returns the seconds spent.
+template <class Command>
+double run_stages(Command&& command, const std::vector<const CommandOptions*>& stages) {
   const auto start = std::chrono::steady_clock::now();
-  if (command(stage) != 0) throw std::runtime_error("the stage in " + dir.string() + " failed");
-  if (!std::filesystem::exists(database)) throw InputError(dir.string() + ": the stage stopped before writing database.h5; run again to resume it");
+  if (command() != 0) throw std::runtime_error("the stage in " + stages.front()->out.string() + " failed");
+  for (const auto* stage : stages)
+    if (!std::filesystem::exists(stage->out / "database.h5"))
+      throw InputError(stage->out.string() + ": the stage stopped before writing database.h5; run again to resume it");
   return seconds_since(start);
 }
 
@@ -61,17 +71,33 @@ double run_stage(int (*command)(const CommandOptions&), const std::string& text,
 ClosedLoopInputs prepare_closed_loop(const Case& c, const CommandOptions& options) {
   ClosedLoopInputs in;
   in.shape = build_part(c).shape;
-  // 1. Offline: the basis's unit profiles (nothing of the truth or the loop in its case, so changing
-  //    those reuses it).
+  // 1. The machining simulations: the offline snapshots of the basis's unit profiles (nothing of the
+  //    truth or the loop in their case, so changing those reuses them) and the truth, the [truth]
+  //    profile on the same mesh and program. When both must be computed, one pass serves them: one
+  //    factorization per station, each database the one its own stage would write.
   auto strip = [&](std::vector<std::string> tables) { return case_text_without(c.resolved_toml, tables, kPathKeys, c.origin); };
   std::vector<std::string> offline_tables = kLoopTables;
   offline_tables.push_back("truth");
-  if (!options.quiet) std::cerr << "drom run: 1/3 offline snapshots (" << (options.out / "offline").string() << ")\n";
-  in.offline_seconds = run_stage(offline_command, strip(offline_tables), options.out / "offline", options);
-  in.reused_offline = in.offline_seconds < 0;
+  const auto offline_stage = stage_to_run(strip(offline_tables), options.out / "offline", options);
+  const auto truth_stage = stage_to_run(strip(kLoopTables), options.out / "truth", options);
+  in.reused_offline = !offline_stage;
+  in.reused_truth = !truth_stage;
+  auto say = [&](const std::string& what) {
+    if (!options.quiet) std::cerr << "drom run: 1/2 " << what << "\n";
+  };
+  if (offline_stage && truth_stage) {
+    say("offline snapshots and truth run, in one machining pass (" + offline_stage->out.string() + ", " + truth_stage->out.string() + ")");
+    in.offline_seconds = run_stages([&] { return offline_and_truth_command(*offline_stage, *truth_stage); }, {&*offline_stage, &*truth_stage});
+    in.one_pass = true;
+  } else {
+    say("offline snapshots (" + (options.out / "offline").string() + (offline_stage ? ")" : ", reused)"));
+    if (offline_stage) in.offline_seconds = run_stages([&] { return offline_command(*offline_stage); }, {&*offline_stage});
+    say("truth run (" + (options.out / "truth").string() + (truth_stage ? ")" : ", reused)"));
+    if (truth_stage) in.truth_seconds = run_stages([&] { return truth_command(*truth_stage); }, {&*truth_stage});
+  }
 
   // 2. The light model, at the case's control.model_tolerance.
-  if (!options.quiet) std::cerr << "drom run: 2/3 light model (" << (options.out / "model").string() << ")\n";
+  if (!options.quiet) std::cerr << "drom run: 2/2 light model (" << (options.out / "model").string() << ")\n";
   const auto model_file = options.out / "model" / "model.h5";
   // Always reduced again (seconds): the model depends on the database and on how it is reduced.
   const bool reduce_needed = true;
@@ -89,10 +115,7 @@ ClosedLoopInputs prepare_closed_loop(const Case& c, const CommandOptions& option
   }
   in.model = reduce::LightModel::read(model_file);
 
-  // 3. The truth: the [truth] profile on the same mesh and program.
-  if (!options.quiet) std::cerr << "drom run: 3/3 truth run (" << (options.out / "truth").string() << ")\n";
-  in.truth_seconds = run_stage(truth_command, strip(kLoopTables), options.out / "truth", options);
-  in.reused_truth = in.truth_seconds < 0;
+  // The truth as the loop plays it.
   const auto truth_file = options.out / "truth" / "database.h5";
   const Hdf5Reader h5(truth_file);
   const Eigen::MatrixXd B1 = read_matrix(h5, "B1"), B2 = read_matrix(h5, "B2"), target_xyz = read_matrix(h5, "target_coordinates"),

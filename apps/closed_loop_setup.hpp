@@ -39,6 +39,7 @@ struct ClosedLoopInputs {
   // The truth with its stresses multiplied by `factor` (displacements are linear in them).
   TruthPlay play(double factor = 1) const;
   double offline_seconds = 0, truth_seconds = 0, reduce_seconds = 0;  // this invocation's
+  bool one_pass = false;  // offline and truth computed in one machining pass (its time in offline_seconds)
   bool reused_offline = false, reused_truth = false;
 };
 

@@ -56,7 +56,7 @@ class FeStation final : public StationSolver {
     return U;
   }
 
-  void write_vtu(const std::filesystem::path& path, const NamedDisplacements& displacements) const override {
+  void write_vtu(const std::filesystem::path& path, const NamedDisplacements& displacements, std::size_t) const override {
     if (!last_) throw std::logic_error("write_vtu before a solve");
     fem::write_solution_vtu(path, *last_, displacements);
   }
@@ -81,8 +81,9 @@ class FeStation final : public StationSolver {
 
 class FeSolvers final : public StationSolvers {
  public:
-  FeSolvers(const PartModel& part, const std::vector<fem::StressProfile>& profiles, const std::vector<int>& clamped)
+  FeSolvers(const PartModel& part, const std::vector<fem::StressProfile>& profiles, const std::vector<int>& clamped, const std::vector<int>& groups)
       : part_(part), profiles_(profiles), clamped_(clamped), base_(part.mesh, part.shape, part.material, profiles) {
+    if (!groups.empty()) base_.set_profile_groups(groups);
     base_.equilibrate(fem::isostatic_dofs(part.mesh, part.shape, std::vector<char>(static_cast<std::size_t>(part.mesh.node_count()), 1)));
   }
   std::unique_ptr<StationSolver> make_worker() const override { return std::make_unique<FeStation>(part_, profiles_, clamped_, base_); }
@@ -140,7 +141,7 @@ class PgdStation final : public StationSolver {
     return U;
   }
 
-  void write_vtu(const std::filesystem::path& path, const NamedDisplacements& displacements) const override {
+  void write_vtu(const std::filesystem::path& path, const NamedDisplacements& displacements, std::size_t first_profile) const override {
     fem::VtuFields fields;
     fields.point_vectors = displacements;
     fields.cell_scalars = {{"activity", problem_.activity()}};
@@ -149,11 +150,11 @@ class PgdStation final : public StationSolver {
     fem::write_vtu(path, part_.mesh, fields, keep);
     // The separated solution itself beside it: the modes of each profile.
     const auto& solutions = problem_.solutions();
-    for (std::size_t p = 0; p < solutions.size() && p < displacements.size(); ++p) {
-      const std::string suffix = solutions.size() > 1 ? displacements[p].first.substr(std::string("displacement").size()) : "";
+    for (std::size_t p = 0; first_profile + p < solutions.size() && p < displacements.size(); ++p) {
+      const std::string suffix = displacements.size() > 1 ? displacements[p].first.substr(std::string("displacement").size()) : "";
       auto modes = path;
       modes.replace_filename(path.stem().string() + "_modes" + suffix + ".h5");
-      pgd::write_modes_hdf5(modes, problem_.grid(), solutions[p]);
+      pgd::write_modes_hdf5(modes, problem_.grid(), solutions[first_profile + p]);
     }
   }
 
@@ -220,9 +221,10 @@ void accumulate(nlohmann::json& total, const nlohmann::json& add) {
 }
 
 std::unique_ptr<StationSolvers> StationSolvers::create(const Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles,
-                                                       const std::vector<int>& clamped) {
+                                                       const std::vector<int>& clamped, const std::vector<int>& groups) {
+  // The PGD solves every profile on its own already.
   if (c.solver == "pgd") return std::make_unique<PgdSolvers>(c, part, profiles, clamped);
-  return std::make_unique<FeSolvers>(part, profiles, clamped);
+  return std::make_unique<FeSolvers>(part, profiles, clamped, groups);
 }
 
 }  // namespace drom::app

@@ -28,9 +28,10 @@ class StationSolver {
   // The unclamped part's shape with these remaining fractions, after best-fit rigid alignment; dofs of
   // nodes that no material holds are 0.
   virtual Eigen::MatrixXd free_shape(const std::vector<double>& activity) = 0;
-  // The state of the last solve (or free_shape) to a .vtu, with these displacement columns (the PGD
-  // also writes its modes beside it: <stem>_modes[_<profile>].h5).
-  virtual void write_vtu(const std::filesystem::path& path, const NamedDisplacements& displacements) const = 0;
+  // The state of the last solve (or free_shape) to a .vtu, with these displacement columns, which are
+  // profiles first_profile, first_profile + 1, ... (the PGD also writes their modes beside it:
+  // <stem>_modes[_<profile>].h5).
+  virtual void write_vtu(const std::filesystem::path& path, const NamedDisplacements& displacements, std::size_t first_profile = 0) const = 0;
   // Solver figures for summary.json (seconds, counts); workers' figures are summed.
   virtual nlohmann::json statistics() const = 0;
 };
@@ -38,9 +39,11 @@ class StationSolver {
 class StationSolvers {
  public:
   virtual ~StationSolvers() = default;
-  // Equilibrates the intact stock under each profile.
+  // Equilibrates the intact stock under each profile. `groups` (sizes, in order; empty: one group):
+  // profiles loaded and solved apart, so that each group's columns are bit for bit what a run of that
+  // group alone gives (drom run computes the offline and truth databases in one pass).
   static std::unique_ptr<StationSolvers> create(const Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles,
-                                                const std::vector<int>& clamped);
+                                                const std::vector<int>& clamped, const std::vector<int>& groups = {});
   virtual std::unique_ptr<StationSolver> make_worker() const = 0;
   // Stations a worker takes at a time and solves in order: the FE solves each station on its own (1);
   // the PGD warm-starts each station from the previous one within a chunk. Chunks start cold, so the

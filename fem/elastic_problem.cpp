@@ -14,6 +14,7 @@ ElasticProblem::ElasticProblem(const Mesh& mesh, const PartShape& shape, const M
       pattern_(mesh),
       activity_(static_cast<std::size_t>(mesh.element_count()), 1.0) {
   if (profiles_.empty()) throw std::invalid_argument("ElasticProblem: at least one stress profile");
+  groups_.push_back(profiles_);
 }
 
 Eigen::VectorXd ElasticProblem::gather(int e, const Eigen::VectorXd& u) const {
@@ -54,7 +55,7 @@ void ElasticProblem::equilibrate(const std::vector<int>& isostatic_dofs) {
   const auto P = static_cast<Eigen::Index>(profiles_.size());
   Eigen::MatrixXd fR = Eigen::MatrixXd::Zero(mesh_.dof_count(), P);
   for (int e = 0; e < mesh_.element_count(); ++e) {
-    const Eigen::MatrixXd fe = operators_.stress_load(e, profiles_, shape_);
+    const Eigen::MatrixXd fe = stress_load(e);
     const auto nodes = mesh_.element(e);
     for (std::size_t a = 0; a < nodes.size(); ++a) fR.middleRows<3>(3 * nodes[a]) += fe.middleRows<3>(3 * static_cast<Eigen::Index>(a));
   }
@@ -67,11 +68,20 @@ void ElasticProblem::equilibrate(const std::vector<int>& isostatic_dofs) {
   Eigen::MatrixXd rhs = -fR;
   for (int d : isostatic_dofs) rhs.row(d).setZero();
   solver_.factorize(Kheld);
-  u0_ = solver_.solve(rhs);
+  u0_ = solve_by_group(rhs);
 
   // The profile is self-equilibrated, so the 3-2-1 reactions vanish and r0 is solver noise; it is
   // kept and subtracted so the load below equals -sum_e a_e int B^T sigma0 literally.
-  r0_ = fR + K.selfadjointView<Eigen::Lower>() * u0_;
+  if (groups_.size() == 1) {
+    r0_ = fR + K.selfadjointView<Eigen::Lower>() * u0_;
+  } else {
+    r0_.resize(fR.rows(), P);
+    for (Eigen::Index first = 0; const auto& g : groups_) {
+      const auto n = static_cast<Eigen::Index>(g.size());
+      r0_.middleCols(first, n) = fR.middleCols(first, n) + K.selfadjointView<Eigen::Lower>() * u0_.middleCols(first, n);
+      first += n;
+    }
+  }
   relative_residual_ = r0_.cwiseAbs().maxCoeff() / std::max(1e-300, fR.cwiseAbs().maxCoeff());
   equilibrated_ = true;
 }
@@ -79,6 +89,7 @@ void ElasticProblem::equilibrate(const std::vector<int>& isostatic_dofs) {
 void ElasticProblem::adopt_equilibrium(const ElasticProblem& other) {
   if (&other.mesh_ != &mesh_ || other.profiles_.size() != profiles_.size() || !other.equilibrated_)
     throw std::invalid_argument("adopt_equilibrium: the other problem must be equilibrated on the same mesh and profiles");
+  groups_ = other.groups_;
   u0_ = other.u0_;
   r0_ = other.r0_;
   relative_residual_ = other.relative_residual_;
@@ -119,7 +130,7 @@ void ElasticProblem::assemble_and_factorize() {
 }
 
 Eigen::MatrixXd ElasticProblem::element_load(int e) {
-  const Eigen::MatrixXd fR = operators_.stress_load(e, profiles_, shape_);
+  const Eigen::MatrixXd fR = stress_load(e);
   const Eigen::MatrixXd& Ke = operators_.stiffness(e);
   Eigen::MatrixXd fe = fR;
   for (Eigen::Index p = 0; p < fe.cols(); ++p) fe.col(p) += Ke * gather(e, u0_.col(p));
@@ -141,7 +152,43 @@ Eigen::MatrixXd ElasticProblem::solve() {
   for (int d = 0; d < mesh_.dof_count(); ++d)
     if (orphan_[static_cast<std::size_t>(d)]) F.row(d).setZero();
   for (int d : fixed_dofs_) F.row(d).setZero();
-  return solver_.solve(F);
+  return solve_by_group(F);
+}
+
+void ElasticProblem::set_profile_groups(std::vector<int> sizes) {
+  if (equilibrated_) throw std::logic_error("set_profile_groups after equilibrate");
+  std::size_t total = 0;
+  for (int n : sizes) {
+    if (n < 1) throw std::invalid_argument("set_profile_groups: every group needs a profile");
+    total += static_cast<std::size_t>(n);
+  }
+  if (total != profiles_.size()) throw std::invalid_argument("set_profile_groups: the group sizes must add up to the profile count");
+  groups_.clear();
+  for (std::size_t first = 0; int n : sizes) {
+    groups_.emplace_back(profiles_.begin() + static_cast<std::ptrdiff_t>(first), profiles_.begin() + static_cast<std::ptrdiff_t>(first + static_cast<std::size_t>(n)));
+    first += static_cast<std::size_t>(n);
+  }
+}
+
+Eigen::MatrixXd ElasticProblem::stress_load(int e) const {
+  if (groups_.size() == 1) return operators_.stress_load(e, groups_.front(), shape_);
+  Eigen::MatrixXd f(3 * static_cast<Eigen::Index>(mesh_.element(e).size()), static_cast<Eigen::Index>(profiles_.size()));
+  for (Eigen::Index first = 0; const auto& g : groups_) {
+    f.middleCols(first, static_cast<Eigen::Index>(g.size())) = operators_.stress_load(e, g, shape_);
+    first += static_cast<Eigen::Index>(g.size());
+  }
+  return f;
+}
+
+Eigen::MatrixXd ElasticProblem::solve_by_group(const Eigen::MatrixXd& rhs) {
+  if (groups_.size() == 1) return solver_.solve(rhs);
+  Eigen::MatrixXd u(rhs.rows(), rhs.cols());
+  for (Eigen::Index first = 0; const auto& g : groups_) {
+    const auto n = static_cast<Eigen::Index>(g.size());
+    u.middleCols(first, n) = solver_.solve(rhs.middleCols(first, n));
+    first += n;
+  }
+  return u;
 }
 
 std::vector<Vector6d> ElasticProblem::element_stresses(int p, const Eigen::VectorXd& u) const {

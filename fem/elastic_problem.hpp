@@ -33,8 +33,13 @@ class ElasticProblem {
   // Step 1: equilibrate each profile on the intact free stock (held 3-2-1 at `isostatic_dofs`).
   void equilibrate(const std::vector<int>& isostatic_dofs);
   // Or take the equilibrium another problem on the same mesh, part and profiles computed (so parallel
-  // workers share one equilibration).
+  // workers share one equilibration), and its profile groups.
   void adopt_equilibrium(const ElasticProblem& other);
+  // Before equilibrate: the profiles in consecutive groups of these sizes (default: one group), each
+  // loaded and solved on its own, so that a group's columns are bit for bit those of a problem
+  // holding that group alone (the quadrature follows a group's highest degree, and a triangular solve
+  // rounds per block of right-hand sides). Two runs can then share one factorization per station.
+  void set_profile_groups(std::vector<int> sizes);
   // Step 2: which material is left (per element, in [0, 1]) and which dofs are fixed.
   void set_activity(std::vector<double> volume_fraction);
   void set_fixed_dofs(std::vector<int> dofs);
@@ -68,12 +73,15 @@ class ElasticProblem {
  private:
   Eigen::SparseMatrix<double> assemble_stiffness(const std::vector<double>& fraction);
   Eigen::MatrixXd element_load(int e);  // f_R,e + K_e u0_e per profile (3n x P)
+  Eigen::MatrixXd stress_load(int e) const;  // f_R,e per profile, group by group
+  Eigen::MatrixXd solve_by_group(const Eigen::MatrixXd& rhs);
   void hold(Eigen::SparseMatrix<double>& K, const std::vector<char>& held) const;
   Eigen::VectorXd gather(int e, const Eigen::VectorXd& u) const;
 
   const Mesh& mesh_;
   PartShape shape_;
   std::vector<StressProfile> profiles_;
+  std::vector<std::vector<StressProfile>> groups_;  // profiles_, split as set_profile_groups says
   ElementOperators operators_;
   StiffnessPattern pattern_;
   SpdSolver solver_;

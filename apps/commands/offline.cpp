@@ -3,6 +3,7 @@
 //            final shape), the snapshot database of design.md §5;
 //   truth:   the same for the case's own profile, with full fields: what later plays the real part.
 // Both checkpoint every station, resume with --resume, and write database.h5 atomically at the end.
+#include "apps/case_reader.hpp"
 #include "apps/case_setup.hpp"
 #include "apps/machining_run.hpp"
 #include "apps/commands.hpp"
@@ -16,6 +17,7 @@
 #include "support/kernel_threads.hpp"
 #include "support/resources.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cinttypes>
@@ -23,6 +25,7 @@
 #include <exception>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <mutex>
 #include <sstream>
 #include <thread>
@@ -102,11 +105,160 @@ std::string profile_name(const fem::StressProfile& prof) {
   return name;
 }
 
-int simulate(const CommandOptions& options, bool truth) {
+// One database the machining pass writes: the unit profiles' (drom offline) or the [truth] profile's
+// (drom truth), each with its own case, --out, checkpoint and frames.
+struct Output {
+  CommandOptions options;
+  bool truth = false;
+  Case c;
+  std::string mode;
+  std::uint64_t case_hash = 0;
+  std::vector<fem::StressProfile> profiles;
+  Eigen::Index first = 0;  // its columns in the pass's solutions
+  std::unique_ptr<Checkpoint> checkpoint;
+  std::size_t frames = 0;
+  Eigen::Index count() const { return static_cast<Eigen::Index>(profiles.size()); }
+};
+
+// Step 5 of simulate for one output: its database from its checkpoints (so a resumed run writes the
+// same bytes), its frames' .pvd and its summary.json (`pass`: the figures of the pass, shared by its
+// outputs).
+template <class Elapsed>
+void write_database(const Output& o, const Case& c, const PartModel& part, const std::vector<int>& target, const std::vector<int>& top,
+                    const std::vector<levelset::Station>& stations, const std::vector<double>& final_activity, Elapsed&& elapsed, double removal_seconds,
+                    const nlohmann::json& pass) {
+  const auto& mesh = part.mesh;
+  const std::size_t ns = stations.size();
+  const Eigen::Index P = o.count();
+  auto is_frame = [&](std::size_t k) { return o.frames > 0 && ((k + 1) * o.frames / ns != k * o.frames / ns || k + 1 == ns); };
+  const auto nt = target.size(), ntop = top.size();
+  std::vector<double> B1(ns * nt * static_cast<std::size_t>(P)), B1_top(ns * ntop * static_cast<std::size_t>(P));
+  for (std::size_t k = 0; k < ns; ++k) {
+    const Eigen::MatrixXd W = o.checkpoint->load(station_name(k));
+    if (W.rows() != static_cast<Eigen::Index>(nt + ntop) || W.cols() != P) throw InputError(o.checkpoint->file(station_name(k)).string() + ": not this run's station");
+    for (std::size_t i = 0; i < nt; ++i)
+      for (Eigen::Index p = 0; p < P; ++p) B1[(k * nt + i) * static_cast<std::size_t>(P) + static_cast<std::size_t>(p)] = W(static_cast<Eigen::Index>(i), p);
+    for (std::size_t i = 0; i < ntop; ++i)
+      for (Eigen::Index p = 0; p < P; ++p) B1_top[(k * ntop + i) * static_cast<std::size_t>(P) + static_cast<std::size_t>(p)] = W(static_cast<Eigen::Index>(nt + i), p);
+  }
+  const Eigen::MatrixXd U2 = o.checkpoint->load("final");
+  std::vector<double> B2(static_cast<std::size_t>(U2.size()));
+  for (Eigen::Index r = 0; r < U2.rows(); ++r)
+    for (Eigen::Index p = 0; p < P; ++p) B2[static_cast<std::size_t>(r * P + p)] = U2(r, p);
+  std::vector<double> time(ns), length(ns), position(3 * ns), target_xyz(3 * nt), target_ids(nt), nodes(3 * static_cast<std::size_t>(mesh.node_count()));
+  for (std::size_t k = 0; k < ns; ++k) {
+    time[k] = stations[k].time;
+    length[k] = stations[k].path_length;
+    for (int d = 0; d < 3; ++d) position[3 * k + static_cast<std::size_t>(d)] = stations[k].position[d];
+  }
+  for (std::size_t i = 0; i < nt; ++i) {
+    target_ids[i] = target[i];
+    for (int d = 0; d < 3; ++d) target_xyz[3 * i + static_cast<std::size_t>(d)] = mesh.nodes[static_cast<std::size_t>(target[i])][d];
+  }
+  std::vector<double> top_ids(top.begin(), top.end());
+  for (int n = 0; n < mesh.node_count(); ++n)
+    for (int d = 0; d < 3; ++d) nodes[3 * static_cast<std::size_t>(n) + static_cast<std::size_t>(d)] = mesh.nodes[static_cast<std::size_t>(n)][d];
+  std::vector<double> connectivity(mesh.connectivity.begin(), mesh.connectivity.end());
+  std::vector<double> unit(2 * static_cast<std::size_t>(P));
+  for (Eigen::Index p = 0; p < P; ++p) {
+    const auto& prof = o.profiles[static_cast<std::size_t>(p)];
+    for (std::size_t j = 0; j < prof.degrees.size(); ++j) {
+      if (prof.sigma11[j] != 0) unit[2 * static_cast<std::size_t>(p)] = 11, unit[2 * static_cast<std::size_t>(p) + 1] = prof.degrees[j];
+      if (prof.sigma22[j] != 0) unit[2 * static_cast<std::size_t>(p)] = 22, unit[2 * static_cast<std::size_t>(p) + 1] = prof.degrees[j];
+    }
+  }
+  std::uint64_t content = fnv1a(B1.data(), B1.size() * sizeof(double), o.case_hash);
+  content = fnv1a(B2.data(), B2.size() * sizeof(double), content);
+  content = fnv1a(B1_top.data(), B1_top.size() * sizeof(double), content);
+  {
+    Hdf5Writer h5(o.options.out / "database.h5");
+    h5.write("B1", B1, ns * nt, static_cast<std::size_t>(P));
+    h5.write("B2", B2, static_cast<std::size_t>(U2.rows()), static_cast<std::size_t>(P));
+    h5.write("B1_top", B1_top, ns * ntop, static_cast<std::size_t>(P));
+    h5.write("top_nodes", top_ids, ntop, 1);
+    h5.write("station_time", time, ns, 1);
+    h5.write("station_path_length", length, ns, 1);
+    h5.write("station_position", position, ns, 3);
+    h5.write("target_nodes", target_ids, nt, 1);
+    h5.write("target_coordinates", target_xyz, nt, 3);
+    h5.write("node_coordinates", nodes, static_cast<std::size_t>(mesh.node_count()), 3);
+    h5.write("connectivity", connectivity, static_cast<std::size_t>(mesh.element_count()), static_cast<std::size_t>(fem::nodes_per_element(mesh.type)));
+    h5.write("final_activity", final_activity, final_activity.size(), 1);
+    if (o.truth) {
+      const auto& truth_profile = part.truth_profile;
+      std::vector<double> coefficients(truth_profile.sigma11);
+      coefficients.insert(coefficients.end(), truth_profile.sigma22.begin(), truth_profile.sigma22.end());
+      h5.write("profile_coefficients", coefficients, 2, truth_profile.degrees.size());
+    } else {
+      h5.write("unit_profiles", unit, static_cast<std::size_t>(P), 2);
+    }
+    const auto& written_degrees = o.truth ? part.truth_profile.degrees : part.degrees;
+    std::vector<double> degrees(written_degrees.begin(), written_degrees.end());
+    h5.write("profile_degrees", degrees, degrees.size(), 1);
+    h5.attribute("kind", o.mode);
+    h5.attribute("case", o.c.resolved_toml);
+    h5.attribute("case_hash", hex(o.case_hash));
+    h5.attribute("content_hash", hex(content));
+    h5.attribute("element", std::string(fem::element_name(mesh.type)));
+    h5.attribute("layout", std::string("B1[(station * n_target + i), profile] = w of target node i at the station; "
+                                       "B1_top[(station * n_top + i), profile] = w of the stock's top node i (top_nodes) at the station; "
+                                       "B2[3 * node + component, profile] = free final shape after best-fit alignment"));
+    h5.commit();
+  }
+  if (o.frames > 0) {
+    fem::PvdCollection pvd;
+    for (std::size_t k = 0; k < ns; ++k)
+      if (is_frame(k)) pvd.add(time[k], std::filesystem::path("frames") / (station_name(k) + ".vtu"));
+    pvd.write(o.options.out / (o.mode + ".pvd"));
+  }
+  o.checkpoint->remove();
+
+  double max_w = 0;
+  for (double v : B1) max_w = std::max(max_w, std::abs(v));
+  const auto db_size = std::filesystem::file_size(o.options.out / "database.h5");
+  nlohmann::json summary{{"command", o.mode},
+                              {"case", c.name},
+                              {"stations", ns},
+                              {"unknowns", mesh.dof_count()},
+                              {"profiles", P},
+                              {"target_nodes", nt},
+                              {"top_nodes", ntop},
+                              {"time_s", elapsed()},
+                              {"removal_time_s", removal_seconds},
+                              {"time_per_station_s", (elapsed() - removal_seconds) / static_cast<double>(ns)},
+                              {"peak_memory_mb", static_cast<double>(peak_memory_bytes()) / 1048576.0},
+                              {"database_mb", static_cast<double>(db_size) / 1048576.0},
+                              {"max_abs_B1_mm", max_w},
+                              {"case_hash", hex(o.case_hash)},
+                              {"content_hash", hex(content)},
+                              {"machine", machine_info()},
+                              {"frames", o.frames},
+                              {"files", o.frames > 0 ? nlohmann::json{"database.h5", o.mode + ".pvd", "frames/", "final_free_shape.vtu"}
+                                                   : nlohmann::json{"database.h5", "final_free_shape.vtu"}}};
+  summary.update(pass);
+  write_summary(o.options.out, summary);
+  if (!o.options.quiet)
+    std::printf("drom %s: %s: %zu stations x %lld profile(s), %d unknowns, %.1f s (%.2f s per station on %d threads) -> %s/database.h5 (%.1f MB)\n",
+                o.mode.c_str(), c.name.c_str(), ns, static_cast<long long>(P), mesh.dof_count(), elapsed(), (elapsed() - removal_seconds) / static_cast<double>(ns),
+                pass.value("threads", 0), o.options.out.string().c_str(), static_cast<double>(db_size) / 1048576.0);
+}
+
+// The machining simulation, once for all `outputs` (one factorization per station serves them all);
+// each output's database is what a pass of its own would write, bit for bit.
+int simulate(std::vector<Output>& outputs) {
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return seconds_since(start); };
   const bool interactive = isatty(2) != 0;
-  const Case c = load_case(options.case_path, options.overrides);
+  const CommandOptions& options = outputs.front().options;  // quiet, threads, stop_after
+  for (auto& o : outputs) o.c = load_case(o.options.case_path, o.options.overrides);
+  // The part from the case that names the truth: the cases may differ by [truth] only (and by the
+  // loop's tables, which no machining reads), or the pass would not be theirs.
+  const auto with_truth = std::find_if(outputs.begin(), outputs.end(), [](const Output& o) { return o.truth; });
+  const Case& c = (with_truth != outputs.end() ? *with_truth : outputs.front()).c;
+  const std::vector<std::string> not_machining = {"truth", "sensor", "sync", "control", "run"};
+  for (const auto& o : outputs)
+    if (case_text_without(o.c.resolved_toml, not_machining, {}, "") != case_text_without(c.resolved_toml, not_machining, {}, ""))
+      throw std::invalid_argument("one machining pass for " + o.c.origin + " and " + c.origin + ": their cases machine different parts");
   const PartModel part = build_part(c);
   const auto& mesh = part.mesh;
   const auto clamped = clamp_dofs(c, part);
@@ -120,13 +272,21 @@ int simulate(const CommandOptions& options, bool truth) {
   // The stock's top face, all of it: where the tool has not been, a laser reads it, and its w is an
   // absolute measurement (not a difference since a cut, as on the floor).
   const std::vector<int> top = fem::target_surface_nodes(mesh, part.shape, {0, part.shape.length_u(), 0, part.shape.length_v(), part.shape.thickness()});
-  const std::vector<fem::StressProfile> profiles = truth ? std::vector<fem::StressProfile>{part.truth_profile} : fem::unit_profiles(part.degrees);
-  const auto P = static_cast<Eigen::Index>(profiles.size());
-  const std::string mode = truth ? "truth" : "offline";
-  const std::uint64_t case_hash = fnv1a(c.resolved_toml.data(), c.resolved_toml.size());
-  // Rows per station: the target's nodes, then the top's ("+top": checkpoints of runs before the top
-  // was kept hold fewer rows and are not mixed in).
-  Checkpoint checkpoint(options.out / ".checkpoint", mode + "+top " + hex(case_hash) + "\n", options.resume);
+  std::vector<fem::StressProfile> profiles;
+  std::vector<int> groups;
+  for (auto& o : outputs) {
+    o.profiles = o.truth ? std::vector<fem::StressProfile>{part.truth_profile} : fem::unit_profiles(part.degrees);
+    o.first = static_cast<Eigen::Index>(profiles.size());
+    profiles.insert(profiles.end(), o.profiles.begin(), o.profiles.end());
+    groups.push_back(static_cast<int>(o.profiles.size()));
+    o.mode = o.truth ? "truth" : "offline";
+    o.case_hash = fnv1a(o.c.resolved_toml.data(), o.c.resolved_toml.size());
+    // Rows per station: the target's nodes, then the top's ("+top": checkpoints of runs before the
+    // top was kept hold fewer rows and are not mixed in).
+    o.checkpoint = std::make_unique<Checkpoint>(o.options.out / ".checkpoint", o.mode + "+top " + hex(o.case_hash) + "\n", o.options.resume);
+  }
+  std::string modes;
+  for (const auto& o : outputs) modes += (modes.empty() ? "" : " + ") + o.mode;
 
   // 1. Removal: the activity of every station (level set, a few seconds).
   MachiningRun run(c, part);
@@ -139,8 +299,9 @@ int simulate(const CommandOptions& options, bool truth) {
     activity[k] = remaining;
   }
   const double removal_seconds = elapsed();
+  const auto P = static_cast<Eigen::Index>(profiles.size());
   if (!options.quiet)
-    std::cerr << "drom " << mode << ": " << c.name << ": " << ns << " stations, " << mesh.dof_count() << " unknowns, " << P << " profile"
+    std::cerr << "drom " << modes << ": " << c.name << ": " << ns << " stations, " << mesh.dof_count() << " unknowns, " << P << " profile"
               << (P > 1 ? "s" : "") << ", " << target.size() << " target-surface nodes (removal " << removal_seconds << " s)\n";
 
   // Station workers fill the cores; threads inside each factorization would fight them (measured: a
@@ -149,20 +310,25 @@ int simulate(const CommandOptions& options, bool truth) {
   const SingleThreadedKernels single_threaded_kernels;
 
   // 2. Equilibrate once; every worker adopts it.
-  const auto solvers = StationSolvers::create(c, part, profiles, clamped);
+  const auto solvers = StationSolvers::create(c, part, profiles, clamped, groups);
   const double equilibrium_seconds = elapsed() - removal_seconds;
 
   // 3. Stations, in parallel (independent given activity, or chunks of them for a warm-starting
   //    solver), each one checkpointed.
   const int threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
-  const int wanted_frames = options.frames >= 0 ? options.frames : (truth ? 10 : 0);
-  const std::size_t frames = static_cast<std::size_t>(std::min<int>(wanted_frames, static_cast<int>(ns)));
-  auto is_frame = [&](std::size_t k) { return frames > 0 && ((k + 1) * frames / ns != k * frames / ns || k + 1 == ns); };
-  auto names = [&](const Eigen::MatrixXd& U) {
+  for (auto& o : outputs) {
+    const int wanted = o.options.frames >= 0 ? o.options.frames : (o.truth ? 10 : 0);
+    o.frames = static_cast<std::size_t>(std::min<int>(wanted, static_cast<int>(ns)));
+  }
+  auto is_frame = [&](const Output& o, std::size_t k) { return o.frames > 0 && ((k + 1) * o.frames / ns != k * o.frames / ns || k + 1 == ns); };
+  auto names = [&](const Output& o, const Eigen::MatrixXd& U) {
     NamedDisplacements named;
-    if (truth) named.emplace_back("displacement", U.col(0));
-    for (Eigen::Index p = 0; !truth && p < U.cols(); ++p) named.emplace_back(profile_name(profiles[static_cast<std::size_t>(p)]), U.col(p));
+    if (o.truth) named.emplace_back("displacement", U.col(o.first));
+    for (Eigen::Index p = 0; !o.truth && p < o.count(); ++p) named.emplace_back(profile_name(o.profiles[static_cast<std::size_t>(p)]), U.col(o.first + p));
     return named;
+  };
+  auto saved_by_all = [&](const std::string& name) {
+    return std::all_of(outputs.begin(), outputs.end(), [&](const Output& o) { return o.checkpoint->has(name); });
   };
   const std::size_t chunk = solvers->chunk();
   const std::size_t chunks = (ns + chunk - 1) / chunk;
@@ -172,7 +338,7 @@ int simulate(const CommandOptions& options, bool truth) {
   std::exception_ptr failure;
   nlohmann::json solver_statistics = nlohmann::json::object();
   std::size_t done_before = 0;
-  for (std::size_t k = 0; k < ns; ++k) done_before += checkpoint.has(station_name(k));
+  for (std::size_t k = 0; k < ns; ++k) done_before += saved_by_all(station_name(k));
   auto worker = [&] {
     try {
       // Again here: OpenMP's max-active-levels is kept per thread, so a worker thread starts with
@@ -184,23 +350,27 @@ int simulate(const CommandOptions& options, bool truth) {
       for (std::size_t j = next++; j < chunks && !stopped; j = next++) {
         const std::size_t first = j * chunk, last = std::min(ns, first + chunk);
         std::size_t missing = first;
-        while (missing < last && checkpoint.has(station_name(missing))) ++missing;
+        while (missing < last && saved_by_all(station_name(missing))) ++missing;
         if (missing == last) continue;
         // A chunk restarts from its first station (cold), so a resumed run solves exactly what an
         // uninterrupted one does; finished stations are recomputed but not written again.
         for (std::size_t k = first; k < last; ++k) {
-          const bool saved = checkpoint.has(station_name(k));
+          const bool saved = saved_by_all(station_name(k));
           if (!saved && options.stop_after >= 0 && solved.fetch_add(1) >= options.stop_after) {
             stopped = true;
             break;
           }
           const Eigen::MatrixXd U = solver->solve(activity[k], k > first);
           if (saved) continue;
-          Eigen::MatrixXd W(static_cast<Eigen::Index>(target.size() + top.size()), P);
-          for (std::size_t i = 0; i < target.size(); ++i) W.row(static_cast<Eigen::Index>(i)) = U.row(3 * target[i] + 2);
-          for (std::size_t i = 0; i < top.size(); ++i) W.row(static_cast<Eigen::Index>(target.size() + i)) = U.row(3 * top[i] + 2);
-          if (is_frame(k)) solver->write_vtu(options.out / "frames" / (station_name(k) + ".vtu"), names(U));
-          checkpoint.save(station_name(k), W);
+          for (const auto& o : outputs) {
+            if (o.checkpoint->has(station_name(k))) continue;
+            Eigen::MatrixXd W(static_cast<Eigen::Index>(target.size() + top.size()), o.count());
+            for (std::size_t i = 0; i < target.size(); ++i) W.row(static_cast<Eigen::Index>(i)) = U.row(3 * target[i] + 2).segment(o.first, o.count());
+            for (std::size_t i = 0; i < top.size(); ++i)
+              W.row(static_cast<Eigen::Index>(target.size() + i)) = U.row(3 * top[i] + 2).segment(o.first, o.count());
+            if (is_frame(o, k)) solver->write_vtu(o.options.out / "frames" / (station_name(k) + ".vtu"), names(o, U), static_cast<std::size_t>(o.first));
+            o.checkpoint->save(station_name(k), W);
+          }
           std::lock_guard<std::mutex> lock(report);
           const auto done = static_cast<double>(++done_before);
           const bool report_now = interactive || static_cast<std::size_t>(done) % std::max<std::size_t>(1, ns / 50) == 0 || static_cast<std::size_t>(done) == ns;
@@ -224,141 +394,56 @@ int simulate(const CommandOptions& options, bool truth) {
   if (!options.quiet && interactive) std::cerr << "\n";
   if (failure) std::rethrow_exception(failure);
   std::size_t finished = 0;
-  for (std::size_t k = 0; k < ns; ++k) finished += checkpoint.has(station_name(k));
+  for (std::size_t k = 0; k < ns; ++k) finished += saved_by_all(station_name(k));
   if (finished < ns) {
-    if (!options.quiet) std::cerr << "drom " << mode << ": stopped after " << finished << " of " << ns << " stations; continue with --resume\n";
+    if (!options.quiet) std::cerr << "drom " << modes << ": stopped after " << finished << " of " << ns << " stations; continue with --resume\n";
     return 0;
   }
 
   // 4. The free final shape (best-fit alignment), one column per profile.
-  if (!checkpoint.has("final")) {
+  if (!saved_by_all("final")) {
     const auto solver = solvers->make_worker();
     const Eigen::MatrixXd U = solver->free_shape(activity.back());
-    solver->write_vtu(options.out / "final_free_shape.vtu", names(U));
     accumulate(solver_statistics, {{"final_shape", solver->statistics()}});
-    checkpoint.save("final", U);
-  }
-
-  // 5. The database, from the checkpoints (so a resumed run writes the same bytes).
-  const auto nt = target.size(), ntop = top.size();
-  std::vector<double> B1(ns * nt * static_cast<std::size_t>(P)), B1_top(ns * ntop * static_cast<std::size_t>(P));
-  for (std::size_t k = 0; k < ns; ++k) {
-    const Eigen::MatrixXd W = checkpoint.load(station_name(k));
-    if (W.rows() != static_cast<Eigen::Index>(nt + ntop) || W.cols() != P) throw InputError(checkpoint.file(station_name(k)).string() + ": not this run's station");
-    for (std::size_t i = 0; i < nt; ++i)
-      for (Eigen::Index p = 0; p < P; ++p) B1[(k * nt + i) * static_cast<std::size_t>(P) + static_cast<std::size_t>(p)] = W(static_cast<Eigen::Index>(i), p);
-    for (std::size_t i = 0; i < ntop; ++i)
-      for (Eigen::Index p = 0; p < P; ++p) B1_top[(k * ntop + i) * static_cast<std::size_t>(P) + static_cast<std::size_t>(p)] = W(static_cast<Eigen::Index>(nt + i), p);
-  }
-  const Eigen::MatrixXd U2 = checkpoint.load("final");
-  std::vector<double> B2(static_cast<std::size_t>(U2.size()));
-  for (Eigen::Index r = 0; r < U2.rows(); ++r)
-    for (Eigen::Index p = 0; p < P; ++p) B2[static_cast<std::size_t>(r * P + p)] = U2(r, p);
-  std::vector<double> time(ns), length(ns), position(3 * ns), target_xyz(3 * nt), target_ids(nt), nodes(3 * static_cast<std::size_t>(mesh.node_count()));
-  for (std::size_t k = 0; k < ns; ++k) {
-    time[k] = stations[k].time;
-    length[k] = stations[k].path_length;
-    for (int d = 0; d < 3; ++d) position[3 * k + static_cast<std::size_t>(d)] = stations[k].position[d];
-  }
-  for (std::size_t i = 0; i < nt; ++i) {
-    target_ids[i] = target[i];
-    for (int d = 0; d < 3; ++d) target_xyz[3 * i + static_cast<std::size_t>(d)] = mesh.nodes[static_cast<std::size_t>(target[i])][d];
-  }
-  std::vector<double> top_ids(top.begin(), top.end());
-  for (int n = 0; n < mesh.node_count(); ++n)
-    for (int d = 0; d < 3; ++d) nodes[3 * static_cast<std::size_t>(n) + static_cast<std::size_t>(d)] = mesh.nodes[static_cast<std::size_t>(n)][d];
-  std::vector<double> connectivity(mesh.connectivity.begin(), mesh.connectivity.end());
-  std::vector<double> unit(2 * static_cast<std::size_t>(P));
-  for (Eigen::Index p = 0; p < P; ++p) {
-    const auto& prof = profiles[static_cast<std::size_t>(p)];
-    for (std::size_t j = 0; j < prof.degrees.size(); ++j) {
-      if (prof.sigma11[j] != 0) unit[2 * static_cast<std::size_t>(p)] = 11, unit[2 * static_cast<std::size_t>(p) + 1] = prof.degrees[j];
-      if (prof.sigma22[j] != 0) unit[2 * static_cast<std::size_t>(p)] = 22, unit[2 * static_cast<std::size_t>(p) + 1] = prof.degrees[j];
+    for (const auto& o : outputs) {
+      if (o.checkpoint->has("final")) continue;
+      solver->write_vtu(o.options.out / "final_free_shape.vtu", names(o, U), static_cast<std::size_t>(o.first));
+      o.checkpoint->save("final", U.middleCols(o.first, o.count()));
     }
   }
-  std::uint64_t content = fnv1a(B1.data(), B1.size() * sizeof(double), case_hash);
-  content = fnv1a(B2.data(), B2.size() * sizeof(double), content);
-  content = fnv1a(B1_top.data(), B1_top.size() * sizeof(double), content);
-  {
-    Hdf5Writer h5(options.out / "database.h5");
-    h5.write("B1", B1, ns * nt, static_cast<std::size_t>(P));
-    h5.write("B2", B2, static_cast<std::size_t>(U2.rows()), static_cast<std::size_t>(P));
-    h5.write("B1_top", B1_top, ns * ntop, static_cast<std::size_t>(P));
-    h5.write("top_nodes", top_ids, ntop, 1);
-    h5.write("station_time", time, ns, 1);
-    h5.write("station_path_length", length, ns, 1);
-    h5.write("station_position", position, ns, 3);
-    h5.write("target_nodes", target_ids, nt, 1);
-    h5.write("target_coordinates", target_xyz, nt, 3);
-    h5.write("node_coordinates", nodes, static_cast<std::size_t>(mesh.node_count()), 3);
-    h5.write("connectivity", connectivity, static_cast<std::size_t>(mesh.element_count()), static_cast<std::size_t>(fem::nodes_per_element(mesh.type)));
-    h5.write("final_activity", activity.back(), activity.back().size(), 1);
-    if (truth) {
-      const auto& truth_profile = part.truth_profile;
-      std::vector<double> coefficients(truth_profile.sigma11);
-      coefficients.insert(coefficients.end(), truth_profile.sigma22.begin(), truth_profile.sigma22.end());
-      h5.write("profile_coefficients", coefficients, 2, truth_profile.degrees.size());
-    } else {
-      h5.write("unit_profiles", unit, static_cast<std::size_t>(P), 2);
-    }
-    const auto& written_degrees = truth ? part.truth_profile.degrees : part.degrees;
-    std::vector<double> degrees(written_degrees.begin(), written_degrees.end());
-    h5.write("profile_degrees", degrees, degrees.size(), 1);
-    h5.attribute("kind", mode);
-    h5.attribute("case", c.resolved_toml);
-    h5.attribute("case_hash", hex(case_hash));
-    h5.attribute("content_hash", hex(content));
-    h5.attribute("element", std::string(fem::element_name(mesh.type)));
-    h5.attribute("layout", std::string("B1[(station * n_target + i), profile] = w of target node i at the station; "
-                                       "B1_top[(station * n_top + i), profile] = w of the stock's top node i (top_nodes) at the station; "
-                                       "B2[3 * node + component, profile] = free final shape after best-fit alignment"));
-    h5.commit();
-  }
-  if (frames > 0) {
-    fem::PvdCollection pvd;
-    for (std::size_t k = 0; k < ns; ++k)
-      if (is_frame(k)) pvd.add(time[k], std::filesystem::path("frames") / (station_name(k) + ".vtu"));
-    pvd.write(options.out / (mode + ".pvd"));
-  }
-  checkpoint.remove();
 
-  double max_w = 0;
-  for (double v : B1) max_w = std::max(max_w, std::abs(v));
-  const auto db_size = std::filesystem::file_size(options.out / "database.h5");
-  write_summary(options.out, {{"command", mode},
-                              {"case", c.name},
-                              {"stations", ns},
-                              {"unknowns", mesh.dof_count()},
-                              {"profiles", P},
-                              {"target_nodes", nt},
-                              {"top_nodes", ntop},
-                              {"threads", threads},
-                              {"time_s", elapsed()},
-                              {"removal_time_s", removal_seconds},
-                              {"time_per_station_s", (elapsed() - removal_seconds) / static_cast<double>(ns)},
-                              {"solver", c.solver},
-                              {"solver_statistics", solver_statistics},
-                              {"equilibrium", solvers->equilibrium_statistics()},
-                              {"equilibrium_time_s", equilibrium_seconds},
-                              {"peak_memory_mb", static_cast<double>(peak_memory_bytes()) / 1048576.0},
-                              {"database_mb", static_cast<double>(db_size) / 1048576.0},
-                              {"max_abs_B1_mm", max_w},
-                              {"case_hash", hex(case_hash)},
-                              {"content_hash", hex(content)},
-                              {"machine", machine_info()},
-                              {"frames", frames},
-                              {"files", frames > 0 ? nlohmann::json{"database.h5", mode + ".pvd", "frames/", "final_free_shape.vtu"}
-                                                   : nlohmann::json{"database.h5", "final_free_shape.vtu"}}});
-  if (!options.quiet)
-    std::printf("drom %s: %s: %zu stations x %lld profile(s), %d unknowns, %.1f s (%.2f s per station on %d threads) -> %s/database.h5 (%.1f MB)\n",
-                mode.c_str(), c.name.c_str(), ns, static_cast<long long>(P), mesh.dof_count(), elapsed(), (elapsed() - removal_seconds) / static_cast<double>(ns),
-                threads, options.out.string().c_str(), static_cast<double>(db_size) / 1048576.0);
+  // 5. Each database, from its checkpoints (so a resumed run writes the same bytes).
+  for (const auto& o : outputs) write_database(o, c, part, target, top, stations, activity.back(), elapsed, removal_seconds,
+                                               {{"threads", threads},
+                                                {"solver", c.solver},
+                                                {"solver_statistics", solver_statistics},
+                                                {"equilibrium", solvers->equilibrium_statistics()},
+                                                {"equilibrium_time_s", equilibrium_seconds},
+                                                {"pass_outputs", modes}});
   return 0;
 }
 
 }  // namespace
 
-int offline_command(const CommandOptions& options) { return simulate(options, false); }
-int truth_command(const CommandOptions& options) { return simulate(options, true); }
+int offline_command(const CommandOptions& options) {
+  std::vector<Output> outputs(1);
+  outputs[0].options = options;
+  return simulate(outputs);
+}
+
+int truth_command(const CommandOptions& options) {
+  std::vector<Output> outputs(1);
+  outputs[0].options = options;
+  outputs[0].truth = true;
+  return simulate(outputs);
+}
+
+int offline_and_truth_command(const CommandOptions& offline, const CommandOptions& truth) {
+  std::vector<Output> outputs(2);
+  outputs[0].options = offline;
+  outputs[1].options = truth;
+  outputs[1].truth = true;
+  return simulate(outputs);
+}
 
 }  // namespace drom::app

@@ -1,11 +1,13 @@
 // Issue 4 checks on coarse versions of both cases: superposition, station interpolation, resume,
 // refusing to mix cases, and the physics (panel sag, plate saddle).
+#include "apps/commands.hpp"
 #include "fem/residual_stress.hpp"
 #include "support/hdf5_reader.hpp"
 
 #include "drom_process.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <Eigen/Dense>
 
@@ -230,4 +232,47 @@ TEST(Offline, PlateWithOppositeProfilesEndsAsASaddle) {
   const Eigen::VectorXd c = A.colPivHouseholderQr().solve(b);
   std::printf("free final shape: kx %.3e, ky %.3e 1/mm\n", -2 * c[3], -2 * c[5]);
   EXPECT_LT(c[3] * c[5], 0);  // curvatures of opposite signs: a saddle
+}
+
+namespace {
+
+void expect_same_database(const std::filesystem::path& a_dir, const std::filesystem::path& b_dir) {
+  drom::Hdf5Reader a(a_dir / "database.h5"), b(b_dir / "database.h5");
+  EXPECT_EQ(a.text_attribute("content_hash"), b.text_attribute("content_hash")) << a_dir << " against " << b_dir;
+  for (const char* name : {"B1", "B2", "B1_top", "station_time"}) EXPECT_EQ(a.matrix(name).data, b.matrix(name).data) << name;
+}
+
+}  // namespace
+
+TEST(Offline, OnePassForBothDatabasesWritesWhatTwoPassesWrite) {
+  // drom run computes the offline snapshots and the truth in one machining pass when neither is
+  // there; each database must be the one its own command writes (the truth's profile has a higher
+  // degree, so a shared quadrature or a shared triangular solve would show here).
+  const auto loop = dir("one_pass_run");
+  ASSERT_EQ(run("run" + kPlate + " --out " + loop.string()), "");
+  const auto summary = nlohmann::json::parse(std::ifstream(loop / "summary.json"));
+  EXPECT_TRUE(summary["timing_s"]["offline_and_truth_in_one_pass"].get<bool>());
+  const auto offline = dir("one_pass_offline"), truth = dir("one_pass_truth");
+  ASSERT_EQ(run("offline " + (loop / "offline" / "case.toml").string() + " --out " + offline.string()), "");
+  ASSERT_EQ(run("truth " + (loop / "truth" / "case.toml").string() + " --out " + truth.string()), "");
+  expect_same_database(loop / "offline", offline);
+  expect_same_database(loop / "truth", truth);
+
+  // Interrupted, then resumed with one of the two checkpoints lost: the pass recomputes what that
+  // database misses, and both come out the same again.
+  drom::app::CommandOptions off, tru;
+  off.quiet = tru.quiet = true;
+  off.case_path = loop / "offline" / "case.toml";
+  tru.case_path = loop / "truth" / "case.toml";
+  off.out = dir("one_pass_parts_offline");
+  tru.out = dir("one_pass_parts_truth");
+  off.stop_after = 5;
+  ASSERT_EQ(drom::app::offline_and_truth_command(off, tru), 0);
+  EXPECT_FALSE(std::filesystem::exists(off.out / "database.h5"));
+  std::filesystem::remove_all(tru.out / ".checkpoint");
+  off.stop_after = -1;
+  off.resume = true;
+  ASSERT_EQ(drom::app::offline_and_truth_command(off, tru), 0);
+  expect_same_database(off.out, offline);
+  expect_same_database(tru.out, truth);
 }
