@@ -3,6 +3,7 @@
 //            final shape), the snapshot database of design.md §5;
 //   truth:   the same for the case's own profile, with full fields: what later plays the real part.
 // Both checkpoint every station, resume with --resume, and write database.h5 atomically at the end.
+// drom run asks for both in one pass (offline_and_truth_command): one factorization per station.
 #include "apps/case_reader.hpp"
 #include "apps/case_setup.hpp"
 #include "apps/machining_run.hpp"
@@ -217,24 +218,24 @@ void write_database(const Output& o, const Case& c, const PartModel& part, const
   for (double v : B1) max_w = std::max(max_w, std::abs(v));
   const auto db_size = std::filesystem::file_size(o.options.out / "database.h5");
   nlohmann::json summary{{"command", o.mode},
-                              {"case", c.name},
-                              {"stations", ns},
-                              {"unknowns", mesh.dof_count()},
-                              {"profiles", P},
-                              {"target_nodes", nt},
-                              {"top_nodes", ntop},
-                              {"time_s", elapsed()},
-                              {"removal_time_s", removal_seconds},
-                              {"time_per_station_s", (elapsed() - removal_seconds) / static_cast<double>(ns)},
-                              {"peak_memory_mb", static_cast<double>(peak_memory_bytes()) / 1048576.0},
-                              {"database_mb", static_cast<double>(db_size) / 1048576.0},
-                              {"max_abs_B1_mm", max_w},
-                              {"case_hash", hex(o.case_hash)},
-                              {"content_hash", hex(content)},
-                              {"machine", machine_info()},
-                              {"frames", o.frames},
-                              {"files", o.frames > 0 ? nlohmann::json{"database.h5", o.mode + ".pvd", "frames/", "final_free_shape.vtu"}
-                                                   : nlohmann::json{"database.h5", "final_free_shape.vtu"}}};
+                         {"case", c.name},
+                         {"stations", ns},
+                         {"unknowns", mesh.dof_count()},
+                         {"profiles", P},
+                         {"target_nodes", nt},
+                         {"top_nodes", ntop},
+                         {"time_s", elapsed()},
+                         {"removal_time_s", removal_seconds},
+                         {"time_per_station_s", (elapsed() - removal_seconds) / static_cast<double>(ns)},
+                         {"peak_memory_mb", static_cast<double>(peak_memory_bytes()) / 1048576.0},
+                         {"database_mb", static_cast<double>(db_size) / 1048576.0},
+                         {"max_abs_B1_mm", max_w},
+                         {"case_hash", hex(o.case_hash)},
+                         {"content_hash", hex(content)},
+                         {"machine", machine_info()},
+                         {"frames", o.frames},
+                         {"files", o.frames > 0 ? nlohmann::json{"database.h5", o.mode + ".pvd", "frames/", "final_free_shape.vtu"}
+                                             : nlohmann::json{"database.h5", "final_free_shape.vtu"}}};
   summary.update(pass);
   write_summary(o.options.out, summary);
   if (!o.options.quiet)
