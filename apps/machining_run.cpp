@@ -1,6 +1,7 @@
 #include "apps/machining_run.hpp"
 
 #include "fem/element_samples.hpp"
+#include "support/hdf5_writer.hpp"
 #include "support/input_error.hpp"
 
 #include <stdexcept>
@@ -26,6 +27,21 @@ double MachiningRun::advance(std::vector<double>& remaining) {
   swept_to_ = to;
   removal_->update_remaining(samples_, criterion_, remaining, true);
   return removed;
+}
+
+bool frame_at(std::size_t k, std::size_t ns, std::size_t frames) { return frames > 0 && ((k + 1) * frames / ns != k * frames / ns || k + 1 == ns); }
+
+void write_stations(Hdf5Writer& h5, const std::vector<levelset::Station>& stations) {
+  const std::size_t ns = stations.size();
+  std::vector<double> time(ns), length(ns), position(3 * ns);
+  for (std::size_t k = 0; k < ns; ++k) {
+    time[k] = stations[k].time;
+    length[k] = stations[k].path_length;
+    for (int d = 0; d < 3; ++d) position[3 * k + static_cast<std::size_t>(d)] = stations[k].position[d];
+  }
+  h5.write("station_time", time, ns, 1);
+  h5.write("station_path_length", length, ns, 1);
+  h5.write("station_position", position, ns, 3);
 }
 
 }  // namespace drom::app

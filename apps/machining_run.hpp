@@ -8,7 +8,18 @@
 #include <memory>
 #include <vector>
 
+namespace drom {
+class Hdf5Writer;
+}
+
 namespace drom::app {
+
+// Whether station k of ns writes one of `frames` full-field frames: spread evenly, the last station
+// always (none when frames is 0).
+bool frame_at(std::size_t k, std::size_t ns, std::size_t frames);
+// The stations' program times, path lengths and tool positions, as the datasets station_time,
+// station_path_length and station_position (ns x 3).
+void write_stations(Hdf5Writer& h5, const std::vector<levelset::Station>& stations);
 
 class MachiningRun {
  public:

@@ -14,7 +14,7 @@ ElasticProblem::ElasticProblem(const Mesh& mesh, const PartShape& shape, const M
       pattern_(mesh),
       activity_(static_cast<std::size_t>(mesh.element_count()), 1.0) {
   if (profiles_.empty()) throw std::invalid_argument("ElasticProblem: at least one stress profile");
-  groups_.push_back(profiles_);
+  group_sizes_ = {static_cast<Eigen::Index>(profiles_.size())};
 }
 
 Eigen::VectorXd ElasticProblem::gather(int e, const Eigen::VectorXd& u) const {
@@ -72,16 +72,10 @@ void ElasticProblem::equilibrate(const std::vector<int>& isostatic_dofs) {
 
   // The profile is self-equilibrated, so the 3-2-1 reactions vanish and r0 is solver noise; it is
   // kept and subtracted so the load below equals -sum_e a_e int B^T sigma0 literally.
-  if (groups_.size() == 1) {
-    r0_ = fR + K.selfadjointView<Eigen::Lower>() * u0_;
-  } else {
-    r0_.resize(fR.rows(), P);
-    for (Eigen::Index first = 0; const auto& g : groups_) {
-      const auto n = static_cast<Eigen::Index>(g.size());
-      r0_.middleCols(first, n) = fR.middleCols(first, n) + K.selfadjointView<Eigen::Lower>() * u0_.middleCols(first, n);
-      first += n;
-    }
-  }
+  r0_.resize(fR.rows(), P);
+  for_each_group([&](Eigen::Index first, Eigen::Index n) {
+    r0_.middleCols(first, n) = fR.middleCols(first, n) + K.selfadjointView<Eigen::Lower>() * u0_.middleCols(first, n);
+  });
   relative_residual_ = r0_.cwiseAbs().maxCoeff() / std::max(1e-300, fR.cwiseAbs().maxCoeff());
   equilibrated_ = true;
 }
@@ -89,7 +83,7 @@ void ElasticProblem::equilibrate(const std::vector<int>& isostatic_dofs) {
 void ElasticProblem::adopt_equilibrium(const ElasticProblem& other) {
   if (&other.mesh_ != &mesh_ || other.profiles_.size() != profiles_.size() || !other.equilibrated_)
     throw std::invalid_argument("adopt_equilibrium: the other problem must be equilibrated on the same mesh and profiles");
-  groups_ = other.groups_;
+  group_sizes_ = other.group_sizes_;
   u0_ = other.u0_;
   r0_ = other.r0_;
   relative_residual_ = other.relative_residual_;
@@ -163,31 +157,22 @@ void ElasticProblem::set_profile_groups(std::vector<int> sizes) {
     total += static_cast<std::size_t>(n);
   }
   if (total != profiles_.size()) throw std::invalid_argument("set_profile_groups: the group sizes must add up to the profile count");
-  groups_.clear();
-  for (std::size_t first = 0; int n : sizes) {
-    groups_.emplace_back(profiles_.begin() + static_cast<std::ptrdiff_t>(first), profiles_.begin() + static_cast<std::ptrdiff_t>(first + static_cast<std::size_t>(n)));
-    first += static_cast<std::size_t>(n);
-  }
+  group_sizes_.assign(sizes.begin(), sizes.end());
 }
 
 Eigen::MatrixXd ElasticProblem::stress_load(int e) const {
-  if (groups_.size() == 1) return operators_.stress_load(e, groups_.front(), shape_);
   Eigen::MatrixXd f(3 * static_cast<Eigen::Index>(mesh_.element(e).size()), static_cast<Eigen::Index>(profiles_.size()));
-  for (Eigen::Index first = 0; const auto& g : groups_) {
-    f.middleCols(first, static_cast<Eigen::Index>(g.size())) = operators_.stress_load(e, g, shape_);
-    first += static_cast<Eigen::Index>(g.size());
-  }
+  const std::span<const StressProfile> all(profiles_);
+  for_each_group([&](Eigen::Index first, Eigen::Index n) {
+    f.middleCols(first, n) = operators_.stress_load(e, all.subspan(static_cast<std::size_t>(first), static_cast<std::size_t>(n)), shape_);
+  });
   return f;
 }
 
 Eigen::MatrixXd ElasticProblem::solve_by_group(const Eigen::MatrixXd& rhs) {
-  if (groups_.size() == 1) return solver_.solve(rhs);
+  if (group_sizes_.size() == 1) return solver_.solve(rhs);  // no copy of the right-hand sides
   Eigen::MatrixXd u(rhs.rows(), rhs.cols());
-  for (Eigen::Index first = 0; const auto& g : groups_) {
-    const auto n = static_cast<Eigen::Index>(g.size());
-    u.middleCols(first, n) = solver_.solve(rhs.middleCols(first, n));
-    first += n;
-  }
+  for_each_group([&](Eigen::Index first, Eigen::Index n) { u.middleCols(first, n) = solver_.solve(rhs.middleCols(first, n)); });
   return u;
 }
 

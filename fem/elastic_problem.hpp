@@ -75,13 +75,18 @@ class ElasticProblem {
   Eigen::MatrixXd element_load(int e);  // f_R,e + K_e u0_e per profile (3n x P)
   Eigen::MatrixXd stress_load(int e) const;  // f_R,e per profile, group by group
   Eigen::MatrixXd solve_by_group(const Eigen::MatrixXd& rhs);
+  // Calls f(first, count) for each group of profiles, in order.
+  template <class F>
+  void for_each_group(F&& f) const {
+    for (Eigen::Index first = 0; Eigen::Index n : group_sizes_) f(first, n), first += n;
+  }
   void hold(Eigen::SparseMatrix<double>& K, const std::vector<char>& held) const;
   Eigen::VectorXd gather(int e, const Eigen::VectorXd& u) const;
 
   const Mesh& mesh_;
   PartShape shape_;
   std::vector<StressProfile> profiles_;
-  std::vector<std::vector<StressProfile>> groups_;  // profiles_, split as set_profile_groups says
+  std::vector<Eigen::Index> group_sizes_;  // consecutive groups of profiles_ (set_profile_groups)
   ElementOperators operators_;
   StiffnessPattern pattern_;
   SpdSolver solver_;

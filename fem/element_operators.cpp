@@ -92,7 +92,7 @@ const Eigen::MatrixXd& ElementOperators::stiffness(int e) {
   return scratch_;
 }
 
-Eigen::MatrixXd ElementOperators::stress_load(int e, const std::vector<StressProfile>& profiles, const PartShape& shape) const {
+Eigen::MatrixXd ElementOperators::stress_load(int e, std::span<const StressProfile> profiles, const PartShape& shape) const {
   int degree = 0;
   for (const auto& p : profiles) degree = std::max(degree, p.max_degree());
   // B is of degree 1-2 in the reference variables; curved panels add a little more.

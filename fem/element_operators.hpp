@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include <span>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -35,7 +36,7 @@ class ElementOperators {
   // another share one computation: structured plates have only a handful of distinct shapes.
   const Eigen::MatrixXd& stiffness(int e);
   // int_e B^T sigma_R for each profile (3n x P), with a rule exact for the profile's degree.
-  Eigen::MatrixXd stress_load(int e, const std::vector<StressProfile>& profiles, const PartShape& shape) const;
+  Eigen::MatrixXd stress_load(int e, std::span<const StressProfile> profiles, const PartShape& shape) const;
   // Average over the element's quadrature points of C eps(u_e) + sigma_R (u_e: element dofs).
   Vector6d mean_stress(int e, const Eigen::VectorXd& element_displacement, const StressProfile* profile,
                        const PartShape& shape) const;

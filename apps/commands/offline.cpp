@@ -131,7 +131,6 @@ void write_database(const Output& o, const Case& c, const PartModel& part, const
   const auto& mesh = part.mesh;
   const std::size_t ns = stations.size();
   const Eigen::Index P = o.count();
-  auto is_frame = [&](std::size_t k) { return o.frames > 0 && ((k + 1) * o.frames / ns != k * o.frames / ns || k + 1 == ns); };
   const auto nt = target.size(), ntop = top.size();
   std::vector<double> B1(ns * nt * static_cast<std::size_t>(P)), B1_top(ns * ntop * static_cast<std::size_t>(P));
   for (std::size_t k = 0; k < ns; ++k) {
@@ -146,12 +145,7 @@ void write_database(const Output& o, const Case& c, const PartModel& part, const
   std::vector<double> B2(static_cast<std::size_t>(U2.size()));
   for (Eigen::Index r = 0; r < U2.rows(); ++r)
     for (Eigen::Index p = 0; p < P; ++p) B2[static_cast<std::size_t>(r * P + p)] = U2(r, p);
-  std::vector<double> time(ns), length(ns), position(3 * ns), target_xyz(3 * nt), target_ids(nt), nodes(3 * static_cast<std::size_t>(mesh.node_count()));
-  for (std::size_t k = 0; k < ns; ++k) {
-    time[k] = stations[k].time;
-    length[k] = stations[k].path_length;
-    for (int d = 0; d < 3; ++d) position[3 * k + static_cast<std::size_t>(d)] = stations[k].position[d];
-  }
+  std::vector<double> target_xyz(3 * nt), target_ids(nt), nodes(3 * static_cast<std::size_t>(mesh.node_count()));
   for (std::size_t i = 0; i < nt; ++i) {
     target_ids[i] = target[i];
     for (int d = 0; d < 3; ++d) target_xyz[3 * i + static_cast<std::size_t>(d)] = mesh.nodes[static_cast<std::size_t>(target[i])][d];
@@ -177,9 +171,7 @@ void write_database(const Output& o, const Case& c, const PartModel& part, const
     h5.write("B2", B2, static_cast<std::size_t>(U2.rows()), static_cast<std::size_t>(P));
     h5.write("B1_top", B1_top, ns * ntop, static_cast<std::size_t>(P));
     h5.write("top_nodes", top_ids, ntop, 1);
-    h5.write("station_time", time, ns, 1);
-    h5.write("station_path_length", length, ns, 1);
-    h5.write("station_position", position, ns, 3);
+    write_stations(h5, stations);
     h5.write("target_nodes", target_ids, nt, 1);
     h5.write("target_coordinates", target_xyz, nt, 3);
     h5.write("node_coordinates", nodes, static_cast<std::size_t>(mesh.node_count()), 3);
@@ -209,7 +201,7 @@ void write_database(const Output& o, const Case& c, const PartModel& part, const
   if (o.frames > 0) {
     fem::PvdCollection pvd;
     for (std::size_t k = 0; k < ns; ++k)
-      if (is_frame(k)) pvd.add(time[k], std::filesystem::path("frames") / (station_name(k) + ".vtu"));
+      if (frame_at(k, ns, o.frames)) pvd.add(stations[k].time, std::filesystem::path("frames") / (station_name(k) + ".vtu"));
     pvd.write(o.options.out / (o.mode + ".pvd"));
   }
   o.checkpoint->remove();
@@ -321,7 +313,6 @@ int simulate(std::vector<Output>& outputs) {
     const int wanted = o.options.frames >= 0 ? o.options.frames : (o.truth ? 10 : 0);
     o.frames = static_cast<std::size_t>(std::min<int>(wanted, static_cast<int>(ns)));
   }
-  auto is_frame = [&](const Output& o, std::size_t k) { return o.frames > 0 && ((k + 1) * o.frames / ns != k * o.frames / ns || k + 1 == ns); };
   auto names = [&](const Output& o, const Eigen::MatrixXd& U) {
     NamedDisplacements named;
     if (o.truth) named.emplace_back("displacement", U.col(o.first));
@@ -369,7 +360,7 @@ int simulate(std::vector<Output>& outputs) {
             for (std::size_t i = 0; i < target.size(); ++i) W.row(static_cast<Eigen::Index>(i)) = U.row(3 * target[i] + 2).segment(o.first, o.count());
             for (std::size_t i = 0; i < top.size(); ++i)
               W.row(static_cast<Eigen::Index>(target.size() + i)) = U.row(3 * top[i] + 2).segment(o.first, o.count());
-            if (is_frame(o, k)) solver->write_vtu(o.options.out / "frames" / (station_name(k) + ".vtu"), names(o, U), static_cast<std::size_t>(o.first));
+            if (frame_at(k, ns, o.frames)) solver->write_vtu(o.options.out / "frames" / (station_name(k) + ".vtu"), names(o, U), static_cast<std::size_t>(o.first));
             o.checkpoint->save(station_name(k), W);
           }
           std::lock_guard<std::mutex> lock(report);

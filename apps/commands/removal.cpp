@@ -38,7 +38,7 @@ int removal_command(const CommandOptions& options) {
   const std::size_t ns = stations.size(), ne = static_cast<std::size_t>(mesh.element_count());
   std::vector<float> activity;
   activity.reserve(ns * ne);
-  std::vector<double> removed(ns), mesh_removed(ns), time(ns), length(ns), position(3 * ns);
+  std::vector<double> removed(ns), mesh_removed(ns);
   std::vector<double> remaining(ne, 1.0);
   const int frames = std::max(1, std::min<int>(c.frames, static_cast<int>(ns)));
   fem::PvdCollection pvd;
@@ -54,15 +54,11 @@ int removal_command(const CommandOptions& options) {
     }
     removed[k] = run.removal().removed_volume();
     mesh_removed[k] = gone;
-    time[k] = stations[k].time;
-    length[k] = stations[k].path_length;
-    for (int d = 0; d < 3; ++d) position[3 * k + static_cast<std::size_t>(d)] = stations[k].position[d];
     char row[256];
-    std::snprintf(row, sizeof row, "%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", k, time[k], length[k], stations[k].position.x(),
+    std::snprintf(row, sizeof row, "%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", k, stations[k].time, stations[k].path_length, stations[k].position.x(),
                   stations[k].position.y(), stations[k].position.z(), removed[k], added, gone);
     csv << row;
-    // Frames spread evenly over the stations, the last one always.
-    if ((k + 1) * static_cast<std::size_t>(frames) / ns != k * static_cast<std::size_t>(frames) / ns || k + 1 == ns) {
+    if (frame_at(k, ns, static_cast<std::size_t>(frames))) {
       std::vector<char> keep(ne);
       for (std::size_t e = 0; e < ne; ++e) keep[e] = remaining[e] > 0;
       fem::VtuFields fields;
@@ -70,7 +66,7 @@ int removal_command(const CommandOptions& options) {
       char name[64];
       std::snprintf(name, sizeof name, "removal_%05zu.vtu", k);
       fem::write_vtu(options.out / "frames" / name, mesh, fields, keep);
-      pvd.add(time[k], std::filesystem::path("frames") / name);
+      pvd.add(stations[k].time, std::filesystem::path("frames") / name);
     }
     if (!options.quiet && (k % std::max<std::size_t>(1, ns / 20) == 0 || k + 1 == ns)) {
       const double rate = static_cast<double>(k + 1) / elapsed();
@@ -88,9 +84,7 @@ int removal_command(const CommandOptions& options) {
   {
     Hdf5Writer h5(options.out / "removal.h5");
     h5.write("activity", activity, ns, ne);
-    h5.write("station_time", time, ns, 1);
-    h5.write("station_path_length", length, ns, 1);
-    h5.write("station_position", position, ns, 3);
+    write_stations(h5, stations);
     h5.write("removed_volume", removed, ns, 1);
     h5.write("mesh_removed_volume", mesh_removed, ns, 1);
     h5.write("element_volume", volumes, ne, 1);
