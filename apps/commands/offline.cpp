@@ -125,7 +125,7 @@ struct Output {
 // same bytes), its frames' .pvd and its summary.json (`pass`: the figures of the pass, shared by its
 // outputs).
 template <class Elapsed>
-void write_database(const Output& o, const Case& c, const PartModel& part, const std::vector<int>& target, const std::vector<int>& top,
+void write_database(const Output& o, const PartModel& part, const std::vector<int>& target, const std::vector<int>& top,
                     const std::vector<levelset::Station>& stations, const std::vector<double>& final_activity, Elapsed&& elapsed, double removal_seconds,
                     const nlohmann::json& pass) {
   const auto& mesh = part.mesh;
@@ -210,7 +210,7 @@ void write_database(const Output& o, const Case& c, const PartModel& part, const
   for (double v : B1) max_w = std::max(max_w, std::abs(v));
   const auto db_size = std::filesystem::file_size(o.options.out / "database.h5");
   nlohmann::json summary{{"command", o.mode},
-                         {"case", c.name},
+                         {"case", o.c.name},
                          {"stations", ns},
                          {"unknowns", mesh.dof_count()},
                          {"profiles", P},
@@ -232,7 +232,7 @@ void write_database(const Output& o, const Case& c, const PartModel& part, const
   write_summary(o.options.out, summary);
   if (!o.options.quiet)
     std::printf("drom %s: %s: %zu stations x %lld profile(s), %d unknowns, %.1f s (%.2f s per station on %d threads) -> %s/database.h5 (%.1f MB)\n",
-                o.mode.c_str(), c.name.c_str(), ns, static_cast<long long>(P), mesh.dof_count(), elapsed(), (elapsed() - removal_seconds) / static_cast<double>(ns),
+                o.mode.c_str(), o.c.name.c_str(), ns, static_cast<long long>(P), mesh.dof_count(), elapsed(), (elapsed() - removal_seconds) / static_cast<double>(ns),
                 pass.value("threads", 0), o.options.out.string().c_str(), static_cast<double>(db_size) / 1048576.0);
 }
 
@@ -405,7 +405,7 @@ int simulate(std::vector<Output>& outputs) {
   }
 
   // 5. Each database, from its checkpoints (so a resumed run writes the same bytes).
-  for (const auto& o : outputs) write_database(o, c, part, target, top, stations, activity.back(), elapsed, removal_seconds,
+  for (const auto& o : outputs) write_database(o, part, target, top, stations, activity.back(), elapsed, removal_seconds,
                                                {{"threads", threads},
                                                 {"solver", c.solver},
                                                 {"solver_statistics", solver_statistics},
