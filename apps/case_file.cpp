@@ -1,6 +1,6 @@
 #include "apps/case_file.hpp"
 
-#include "apps/case_reader.hpp"
+#include "support/toml_reader.hpp"
 #include "apps/default_case.hpp"
 #include "support/input_error.hpp"
 
@@ -20,7 +20,7 @@ std::filesystem::path relative_to(const std::string& origin, const std::string& 
   return std::filesystem::path(origin).parent_path() / p;
 }
 
-void read_part(CaseReader& r, Case& c) {
+void read_part(TomlReader& r, Case& c) {
   c.shape = r.choice("part.shape", {"plate", "panel", "stl"});
   if (c.shape == "stl") {
     c.stl = relative_to(r.origin(), r.text("part.stl"));
@@ -36,7 +36,7 @@ void read_part(CaseReader& r, Case& c) {
   }
 }
 
-void read_solver(CaseReader& r, Case& c) {
+void read_solver(TomlReader& r, Case& c) {
   c.solver = r.choice("solver.kind", {"fe", "pgd"}, "fe");
   if (c.solver != "pgd") {
     for (const char* key : {"solver.residual_tolerance", "solver.increment_tolerance", "solver.fixed_point_tolerance", "solver.max_modes", "solver.max_fixed_point_iterations",
@@ -59,7 +59,7 @@ void read_solver(CaseReader& r, Case& c) {
   c.pgd_penalty = r.real("solver.penalty", Range::closed(1e3, 1e14), c.pgd_penalty);
 }
 
-void read_mesh(CaseReader& r, Case& c) {
+void read_mesh(TomlReader& r, Case& c) {
   const char* fallback = c.shape == "stl" ? "tet10" : c.solver == "pgd" ? "hex27" : "hex20";
   c.element = r.choice("mesh.element", {"hex20", "hex27", "tet10"}, fallback);
   if (c.solver == "pgd" && c.element != "hex27")
@@ -84,7 +84,7 @@ int profile_count(const std::string& parity, int max_degree) {
 }
 
 // `section`.sigma11 and .sigma22: one coefficient (MPa) per degree of the parity's basis.
-void read_coefficients(CaseReader& r, const std::string& section, const std::string& parity, int max_degree, std::vector<double>& sigma11,
+void read_coefficients(TomlReader& r, const std::string& section, const std::string& parity, int max_degree, std::vector<double>& sigma11,
                        std::vector<double>& sigma22) {
   const int count = profile_count(parity, max_degree);
   const Range mpa = Range::closed(-2000, 2000);
@@ -98,7 +98,7 @@ void read_coefficients(CaseReader& r, const std::string& section, const std::str
   }
 }
 
-void read_stress(CaseReader& r, Case& c) {
+void read_stress(TomlReader& r, Case& c) {
   c.parity = r.choice("stress.parity", {"even", "odd", "all"});
   c.max_degree = static_cast<int>(r.integer("stress.max_degree", c.parity == "odd" ? 3 : 2, 20));
   if (r.has("stress.table")) {
@@ -109,7 +109,7 @@ void read_stress(CaseReader& r, Case& c) {
   read_coefficients(r, "stress", c.parity, c.max_degree, c.sigma11, c.sigma22);
 }
 
-void read_pocket(CaseReader& r, Case& c) {
+void read_pocket(TomlReader& r, Case& c) {
   c.pocket_x = r.real("pocket.x_min", Range::non_negative());
   c.pocket_y = r.real("pocket.y_min", Range::non_negative());
   c.pocket_length_x = r.real("pocket.length_x", Range::positive());
@@ -122,7 +122,7 @@ void read_pocket(CaseReader& r, Case& c) {
   }
 }
 
-void read_tool(CaseReader& r, Case& c) {
+void read_tool(TomlReader& r, Case& c) {
   c.tool_kind = r.choice("tool.kind", {"flat", "ball", "bull_nose"});
   c.tool_radius = r.real("tool.radius", Range::positive());
   if (c.tool_kind == "bull_nose") {
@@ -135,7 +135,7 @@ void read_tool(CaseReader& r, Case& c) {
   if (c.tool_flute_length <= c.pocket_depth) r.fail("tool.flute_length", "must exceed pocket.depth");
 }
 
-void read_path(CaseReader& r, Case& c) {
+void read_path(TomlReader& r, Case& c) {
   c.path_strategy = r.choice("path.strategy", {"one_way", "zigzag", "spiral"}, "one_way");
   if (r.has("path.gcode")) {
     c.gcode = relative_to(r.origin(), r.text("path.gcode"));
@@ -157,7 +157,7 @@ void read_path(CaseReader& r, Case& c) {
   if (c.stations == "spacing") c.station_spacing = r.real("path.station_spacing", Range::positive());
 }
 
-void read_clamps(CaseReader& r, Case& c) {
+void read_clamps(TomlReader& r, Case& c) {
   const std::size_t n = r.table_count("clamps");
   if (n == 0) r.fail("clamps", "missing; expected at least one [[clamps]] table holding the part");
   for (std::size_t i = 0; i < n; ++i) {
@@ -174,13 +174,13 @@ void read_clamps(CaseReader& r, Case& c) {
   }
 }
 
-std::array<double, 3> triple(CaseReader& r, const std::string& key, std::array<double, 3> fallback) {
+std::array<double, 3> triple(TomlReader& r, const std::string& key, std::array<double, 3> fallback) {
   const auto v = r.reals(key, Range{}, std::vector<double>(fallback.begin(), fallback.end()));
   if (v.size() != 3) r.fail(key, "expected [x, y, z]");
   return {v[0], v[1], v[2]};
 }
 
-void read_truth(CaseReader& r, Case& c) {
+void read_truth(TomlReader& r, Case& c) {
   c.has_truth = r.has("truth.parity") || r.has("truth.max_degree") || r.has("truth.sigma11") || r.has("truth.sigma22") || r.has("truth.table");
   c.truth_amplitude = r.real("truth.amplitude", Range::closed(-100, 100), 1.0);
   if (!c.has_truth) return;
@@ -194,7 +194,7 @@ void read_truth(CaseReader& r, Case& c) {
   read_coefficients(r, "truth", c.truth_parity, c.truth_max_degree, c.truth_sigma11, c.truth_sigma22);
 }
 
-void read_closed_loop(CaseReader& r, Case& c) {
+void read_closed_loop(TomlReader& r, Case& c) {
   c.sensor_offset = triple(r, "sensor.offset", c.sensor_offset);
   c.sensor_angle = r.real("sensor.angle", Range::closed(-180, 180), c.sensor_angle);
   c.sensor_length = r.real("sensor.length", Range::positive(), c.sensor_length);
@@ -242,7 +242,7 @@ Case load_case(const std::optional<std::filesystem::path>& path, const std::vect
 }
 
 Case case_from_text(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides) {
-  CaseReader r(text, origin);
+  TomlReader r(text, origin);
   for (const auto& o : overrides) r.apply_override(o);
 
   Case c;

@@ -1,6 +1,6 @@
 #include "apps/closed_loop_setup.hpp"
 
-#include "apps/case_reader.hpp"
+#include "support/toml_reader.hpp"
 #include "apps/case_setup.hpp"
 #include "support/atomic_file.hpp"
 #include "apps/database_matrix.hpp"

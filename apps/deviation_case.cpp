@@ -1,6 +1,6 @@
 #include "apps/deviation_case.hpp"
 
-#include "apps/case_reader.hpp"
+#include "support/toml_reader.hpp"
 #include "support/input_error.hpp"
 
 #include <fstream>
@@ -10,7 +10,7 @@ namespace drom::app {
 
 namespace {
 
-reduce::DeviationRange range(CaseReader& r, const std::string& key, Range values) {
+reduce::DeviationRange range(TomlReader& r, const std::string& key, Range values) {
   if (!r.has(key)) return {};
   const auto v = r.reals(key, Range{});
   if (v.size() != 3) r.fail(key, "expected [min, max, count]");
@@ -32,7 +32,7 @@ DeviationCase load_deviation_case(const std::filesystem::path& path, const std::
   if (!in) throw InputError(path.string() + ": cannot open case file");
   std::ostringstream ss;
   ss << in.rdbuf();
-  CaseReader r(ss.str(), path.string());
+  TomlReader r(ss.str(), path.string());
   for (const auto& o : overrides) r.apply_override(o);
   DeviationCase c;
   c.origin = path.string();

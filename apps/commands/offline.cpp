@@ -4,7 +4,7 @@
 //   truth:   the same for the case's own profile, with full fields: what later plays the real part.
 // Both checkpoint every station, resume with --resume, and write database.h5 atomically at the end.
 // drom run asks for both in one pass (offline_and_truth_command): one factorization per station.
-#include "apps/case_reader.hpp"
+#include "support/toml_reader.hpp"
 #include "apps/case_setup.hpp"
 #include "apps/machining_run.hpp"
 #include "apps/commands.hpp"

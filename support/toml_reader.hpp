@@ -1,5 +1,5 @@
 #pragma once
-// Typed, validated access to a TOML case file. Every accessor records the key it read; finish()
+// Typed, validated access to a TOML input (case files, machine files). Every accessor records the key it read; finish()
 // then rejects any key nobody asked for, so a typo is an error rather than a silent default.
 // Errors are InputError naming the file, the line and the dotted key.
 #include <memory>
@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace drom::app {
+namespace drom {
 
 struct Range {
   double min = -1e300, max = 1e300;
@@ -21,13 +21,13 @@ struct Range {
   bool contains(double v) const;
 };
 
-class CaseReader {
+class TomlReader {
  public:
   // `origin` names the text in messages (a path, or "<embedded default case>").
-  CaseReader(const std::string& text, std::string origin);
-  ~CaseReader();
-  CaseReader(const CaseReader&) = delete;
-  CaseReader& operator=(const CaseReader&) = delete;
+  TomlReader(const std::string& text, std::string origin);
+  ~TomlReader();
+  TomlReader(const TomlReader&) = delete;
+  TomlReader& operator=(const TomlReader&) = delete;
 
   // Applies one "dotted.key=value" override. The value is read as TOML ("3", "[1, 2]", "'x'"),
   // or as a bare string when it is not valid TOML. Unknown keys are caught by finish().
@@ -65,4 +65,4 @@ class CaseReader {
 std::string case_text_without(const std::string& text, const std::vector<std::string>& tables, const std::vector<std::string>& path_keys,
                               const std::string& base);
 
-}  // namespace drom::app
+}  // namespace drom

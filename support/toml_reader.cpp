@@ -1,4 +1,4 @@
-#include "apps/case_reader.hpp"
+#include "support/toml_reader.hpp"
 
 #include "support/input_error.hpp"
 
@@ -10,7 +10,7 @@
 #include <set>
 #include <sstream>
 
-namespace drom::app {
+namespace drom {
 
 std::string Range::describe() const {
   std::ostringstream s;
@@ -29,7 +29,7 @@ bool Range::contains(double v) const {
   return true;
 }
 
-struct CaseReader::Impl {
+struct TomlReader::Impl {
   toml::table root;
   std::set<std::string> consumed;
   std::set<std::string> overridden;
@@ -59,7 +59,7 @@ struct CaseReader::Impl {
   }
 };
 
-CaseReader::CaseReader(const std::string& text, std::string origin) : impl_(std::make_unique<Impl>()), origin_(std::move(origin)) {
+TomlReader::TomlReader(const std::string& text, std::string origin) : impl_(std::make_unique<Impl>()), origin_(std::move(origin)) {
   try {
     impl_->root = toml::parse(text, origin_);
   } catch (const toml::parse_error& e) {
@@ -69,9 +69,9 @@ CaseReader::CaseReader(const std::string& text, std::string origin) : impl_(std:
   }
 }
 
-CaseReader::~CaseReader() = default;
+TomlReader::~TomlReader() = default;
 
-void CaseReader::apply_override(const std::string& assignment) {
+void TomlReader::apply_override(const std::string& assignment) {
   const auto eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0) throw InputError("--set '" + assignment + "': expected key=value");
   const std::string key = assignment.substr(0, eq), value = assignment.substr(eq + 1);
@@ -103,7 +103,7 @@ void CaseReader::apply_override(const std::string& assignment) {
   impl_->overridden.insert(key);
 }
 
-void CaseReader::fail(const std::string& key, const std::string& message) const {
+void TomlReader::fail(const std::string& key, const std::string& message) const {
   // "key = value: expected ..." reads better than "key: = value: expected ..."
   const std::string sep = message.rfind("= ", 0) == 0 ? " " : ": ";
   std::ostringstream msg;
@@ -117,7 +117,7 @@ void CaseReader::fail(const std::string& key, const std::string& message) const 
   throw InputError(msg.str());
 }
 
-bool CaseReader::has(const std::string& key) const { return impl_->find(key) != nullptr; }
+bool TomlReader::has(const std::string& key) const { return impl_->find(key) != nullptr; }
 
 namespace {
 std::string show(const toml::node& node) {
@@ -127,7 +127,7 @@ std::string show(const toml::node& node) {
 }
 }  // namespace
 
-double CaseReader::real(const std::string& key, Range range) {
+double TomlReader::real(const std::string& key, Range range) {
   impl_->consumed.insert(key);
   auto* node = impl_->find(key);
   if (!node) fail(key, "missing; expected a number " + range.describe());
@@ -139,7 +139,7 @@ double CaseReader::real(const std::string& key, Range range) {
   return v;
 }
 
-double CaseReader::real(const std::string& key, Range range, double fallback) {
+double TomlReader::real(const std::string& key, Range range, double fallback) {
   if (!has(key)) {
     impl_->consumed.insert(key);
     return fallback;
@@ -147,7 +147,7 @@ double CaseReader::real(const std::string& key, Range range, double fallback) {
   return real(key, range);
 }
 
-long long CaseReader::integer(const std::string& key, long long min, long long max) {
+long long TomlReader::integer(const std::string& key, long long min, long long max) {
   impl_->consumed.insert(key);
   auto* node = impl_->find(key);
   if (!node) fail(key, "missing; expected an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "]");
@@ -157,7 +157,7 @@ long long CaseReader::integer(const std::string& key, long long min, long long m
   return *i;
 }
 
-long long CaseReader::integer(const std::string& key, long long min, long long max, long long fallback) {
+long long TomlReader::integer(const std::string& key, long long min, long long max, long long fallback) {
   if (!has(key)) {
     impl_->consumed.insert(key);
     return fallback;
@@ -165,7 +165,7 @@ long long CaseReader::integer(const std::string& key, long long min, long long m
   return integer(key, min, max);
 }
 
-bool CaseReader::boolean(const std::string& key, bool fallback) {
+bool TomlReader::boolean(const std::string& key, bool fallback) {
   impl_->consumed.insert(key);
   auto* node = impl_->find(key);
   if (!node) return fallback;
@@ -174,7 +174,7 @@ bool CaseReader::boolean(const std::string& key, bool fallback) {
   return *b;
 }
 
-std::string CaseReader::text(const std::string& key, std::optional<std::string> fallback) {
+std::string TomlReader::text(const std::string& key, std::optional<std::string> fallback) {
   impl_->consumed.insert(key);
   auto* node = impl_->find(key);
   if (!node) {
@@ -186,7 +186,7 @@ std::string CaseReader::text(const std::string& key, std::optional<std::string> 
   return *s;
 }
 
-std::string CaseReader::choice(const std::string& key, const std::vector<std::string>& allowed, std::optional<std::string> fallback) {
+std::string TomlReader::choice(const std::string& key, const std::vector<std::string>& allowed, std::optional<std::string> fallback) {
   const std::string v = text(key, fallback);
   for (const auto& a : allowed)
     if (a == v) return v;
@@ -195,7 +195,7 @@ std::string CaseReader::choice(const std::string& key, const std::vector<std::st
   fail(key, "= \"" + v + "\": expected one of " + list);
 }
 
-std::vector<double> CaseReader::reals(const std::string& key, Range range, std::optional<std::vector<double>> fallback) {
+std::vector<double> TomlReader::reals(const std::string& key, Range range, std::optional<std::vector<double>> fallback) {
   impl_->consumed.insert(key);
   auto* node = impl_->find(key);
   if (!node) {
@@ -217,7 +217,7 @@ std::vector<double> CaseReader::reals(const std::string& key, Range range, std::
   return values;
 }
 
-std::vector<std::string> CaseReader::strings(const std::string& key) {
+std::vector<std::string> TomlReader::strings(const std::string& key) {
   impl_->consumed.insert(key);
   auto* node = impl_->find(key);
   if (!node) fail(key, "missing; expected an array of strings");
@@ -233,7 +233,7 @@ std::vector<std::string> CaseReader::strings(const std::string& key) {
   return values;
 }
 
-std::size_t CaseReader::table_count(const std::string& key) {
+std::size_t TomlReader::table_count(const std::string& key) {
   impl_->consumed.insert(key);
   auto* node = impl_->find(key);
   if (!node) return 0;
@@ -242,7 +242,7 @@ std::size_t CaseReader::table_count(const std::string& key) {
   return array->size();
 }
 
-void CaseReader::finish() const {
+void TomlReader::finish() const {
   // Depth-first over the document; a key is known if it or one of its parents was consumed as a leaf.
   std::function<void(const toml::node&, const std::string&)> walk = [&](const toml::node& node, const std::string& path) {
     if (!path.empty() && impl_->consumed.count(path) && !node.is_table() && !node.is_array_of_tables()) return;
@@ -259,7 +259,7 @@ void CaseReader::finish() const {
   walk(impl_->root, "");
 }
 
-std::string CaseReader::resolved_text() const {
+std::string TomlReader::resolved_text() const {
   std::ostringstream s;
   s << toml::toml_formatter{impl_->root};
   return s.str();
@@ -283,4 +283,4 @@ std::string case_text_without(const std::string& text, const std::vector<std::st
   return s.str() + "\n";
 }
 
-}  // namespace drom::app
+}  // namespace drom
