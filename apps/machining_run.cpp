@@ -1,6 +1,6 @@
 #include "apps/machining_run.hpp"
 
-#include "fem/element_samples.hpp"
+#include "fem/element_geometry.hpp"
 #include "support/hdf5_writer.hpp"
 #include "support/input_error.hpp"
 
@@ -15,7 +15,7 @@ MachiningRun::MachiningRun(const Case& c, const PartModel& part)
                                           : levelset::stations_by_spacing(path_, *timeline_, c.station_spacing)),
       voxel_(voxel_size_for(c, part)),
       removal_(std::make_unique<levelset::MaterialRemoval>(build_workpiece(c, part, voxel_), build_tool(c), voxel_)),
-      samples_(fem::element_samples(part.mesh, 2 * 3 * voxel_)),  // sample cells as wide as the narrow band
+      elements_(part.mesh),
       criterion_(c.removal_criterion == "centroid" ? levelset::RemovalCriterion::Centroid : levelset::RemovalCriterion::VolumeFraction) {
   if (stations_.empty()) throw InputError(c.origin + ": the toolpath has no cutting move, so there is no station");
 }
@@ -25,7 +25,7 @@ double MachiningRun::advance(std::vector<double>& remaining) {
   const double to = stations_[next_++].path_length;
   const double removed = removal_->sweep(levelset::cutting_polylines(path_, *timeline_, swept_to_, to, 0.01));
   swept_to_ = to;
-  removal_->update_remaining(samples_, criterion_, remaining, true);
+  removal_->update_remaining(elements_, criterion_, remaining, true);
   return removed;
 }
 

@@ -1,7 +1,8 @@
 #pragma once
 // A case's machining, ready to step through station by station: its tool, toolpath, timeline and
-// stations, and the removal level set with the mesh's element samples.
+// stations, and the removal level set over the mesh's elements.
 #include "apps/case_setup.hpp"
+#include "fem/element_geometry.hpp"
 #include "levelset/material_removal.hpp"
 #include "levelset/toolpath.hpp"
 
@@ -43,7 +44,7 @@ class MachiningRun {
   std::vector<levelset::Station> stations_;
   double voxel_ = 0;
   std::unique_ptr<levelset::MaterialRemoval> removal_;
-  levelset::ElementSamples samples_;
+  fem::MeshGeometry elements_;  // refers to the part's mesh, which outlives the run
   levelset::RemovalCriterion criterion_;
   std::size_t next_ = 0;
   double swept_to_ = 0;  // path length swept so far

@@ -5,7 +5,7 @@
 // 6 unit profiles. Prints JSON.
 //   build/bench/station_bench [stations=8] [nx=40]
 #include "fem/elastic_problem.hpp"
-#include "fem/element_samples.hpp"
+#include "fem/element_geometry.hpp"
 #include "fem/node_sets.hpp"
 #include "fem/structured_mesh.hpp"
 #include "fem/supports.hpp"
@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
   const levelset::PathTimeline timeline(path);
   const auto stations = levelset::stations_by_spacing(path, timeline, 25);
   levelset::MaterialRemoval removal(levelset::Workpiece::from_shape(plate), tool, 0.5);
-  const auto samples = fem::element_samples(mesh, 3.0);
+  const fem::MeshGeometry elements(mesh);
 
   const auto degrees = fem::legendre_degrees(fem::ProfileParity::Even, 6);
   fem::ElasticProblem problem(mesh, plate, {71700, 0.33}, fem::unit_profiles(degrees));
@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
   for (std::size_t k = 0; k < stations.size() && measured < wanted; ++k) {
     removal.sweep(levelset::cutting_polylines(path, timeline, previous, stations[k].path_length, 0.01));
     previous = stations[k].path_length;
-    removal.update_remaining(samples, levelset::RemovalCriterion::VolumeFraction, remaining, true);
+    removal.update_remaining(elements, levelset::RemovalCriterion::VolumeFraction, remaining, true);
     if (k % stride != 0) continue;
     problem.set_activity(remaining);
     const double a0 = problem.assembly_seconds(), f0 = problem.solver_stats().factorize_seconds;

@@ -3,6 +3,8 @@
 // removed region), grown station by station by CSG union with the tool's swept volume clipped to
 // the workpiece; and what it means for the elements of a volume mesh.
 #include "levelset/closed_surface.hpp"
+#include "levelset/element_geometry.hpp"
+#include "levelset/element_lattice.hpp"
 #include "levelset/part_shape.hpp"
 #include "levelset/tool.hpp"
 
@@ -33,19 +35,6 @@ class Workpiece {
   Eigen::AlignedBox3d bounds_;
 };
 
-// What removal needs to know of a volume mesh's elements, whatever their type: the centroid, a
-// bounding box, and quadrature points with weights (summing to the element's volume).
-struct ElementSamples {
-  std::vector<Eigen::Vector3d> centroid;
-  std::vector<Eigen::AlignedBox3d> bounds;
-  std::vector<std::vector<Eigen::Vector3d>> points;
-  std::vector<std::vector<double>> weights;
-  // Edge vectors (columns) of the cell each sample stands for, when the samples form a regular
-  // grid; zero otherwise. Cells the cut passes through are integrated at voxel resolution.
-  std::vector<Eigen::Matrix3d> cell;
-  std::size_t size() const { return centroid.size(); }
-};
-
 class MaterialRemoval {
  public:
   // half_width: narrow-band half width in voxels (3 is OpenVDB's default for level sets).
@@ -67,9 +56,16 @@ class MaterialRemoval {
   // Region the last sweep could have changed.
   const Eigen::AlignedBox3d& last_sweep_bounds() const { return last_bounds_; }
 
-  // Remaining volume fraction of each element (1 intact, 0 gone). Only elements whose bounds meet
-  // the last sweep's are re-evaluated when `only_last_sweep` is set.
-  void update_remaining(const ElementSamples& elements, RemovalCriterion criterion, std::vector<double>& remaining,
+  // Remaining volume fraction of each element (1 intact, 0 gone). With `only_last_sweep`, only the
+  // elements whose inside the last sweep's tool may have entered are re-evaluated (`remaining` must
+  // then hold the fractions before that sweep).
+  // Volume fraction: an element the removed region's surface may cross is tiled, in its reference
+  // cell, by a lattice no coarser than a voxel along each direction; every lattice cell is split into
+  // tetrahedra whose cut share is exact for the level set's linear interpolant
+  // (levelset/cut_fraction.hpp). A plane is therefore integrated exactly at any voxel size, whether
+  // it lies on element faces or inside them; curved cuts converge at second order in the lattice
+  // spacing. An element with no stored voxel of the narrow band around it is wholly in or out.
+  void update_remaining(const ElementGeometry& elements, RemovalCriterion criterion, std::vector<double>& remaining,
                         bool only_last_sweep) const;
 
   double voxel_size() const { return voxel_; }
@@ -86,6 +82,14 @@ class MaterialRemoval {
   double voxel_, band_;
   double accumulated_ = 0;
   Eigen::AlignedBox3d last_bounds_;
+  // Every segment swept, to evaluate the removed region exactly near its surface.
+  struct SweptSegments;
+  std::unique_ptr<SweptSegments> swept_;
+  std::size_t first_of_last_sweep_ = 0;
+  // Whether the tool's own extent along a segment (of the last sweep only, or of any) enters the box.
+  bool entered(const Eigen::AlignedBox3d& box, bool last_sweep_only) const;
+  // Elements' reference lattices, kept across updates (elements of one size share one).
+  std::unique_ptr<ElementLattices> lattices_;
 };
 
 // Voxel size from the tool and the mesh: fine enough to resolve the tool's corner and the thinnest

@@ -35,7 +35,8 @@ double Tool::signed_distance(double rho, double h) const {
   const double cx = 0, cy = 0.5 * (r + top);
   const double qx = std::abs(std::abs(rho) - cx) - a;
   const double qy = std::abs(h - cy) - 0.5 * (top - r);
-  const double outside = std::hypot(std::max(qx, 0.0), std::max(qy, 0.0));
+  const double ox = std::max(qx, 0.0), oy = std::max(qy, 0.0);
+  const double outside = std::sqrt(ox * ox + oy * oy);  // lengths in mm: no overflow for hypot to guard against
   const double rounded = outside + std::min(std::max(qx, qy), 0.0) - r;
   return std::max(rounded, h - flute_length);
 }

@@ -3,7 +3,6 @@
 #include "apps/machining_run.hpp"
 #include "apps/commands.hpp"
 #include "apps/summary.hpp"
-#include "fem/element_samples.hpp"
 #include "fem/vtk_output.hpp"
 #include "levelset/gcode.hpp"
 #include "support/atomic_file.hpp"

@@ -186,7 +186,7 @@ TEST(Offline, StationInterpolationErrorIsBounded) {
   EXPECT_LE(worst, 0.5 * worst_step);
 }
 
-TEST(Offline, PanelSagsMostAtTheCentreAndMoreAsMaterialGoes) {
+TEST(Offline, PanelSagsMostInThePocketsMiddleAndMoreAsMaterialGoes) {
   const auto out = dir("panel");
   ASSERT_EQ(run("truth " + kPanel + kPanelStressTruth + " --out " + out.string()), "");
   drom::Hdf5Reader db(out / "database.h5");
@@ -202,8 +202,18 @@ TEST(Offline, PanelSagsMostAtTheCentreAndMoreAsMaterialGoes) {
     if (d < best) best = d, centre = i;
   }
   const Eigen::VectorXd last = B1.middleRows((ns - 1) * nt, nt).col(0);
-  std::printf("panel: centre w %.4f mm at the last station, max |w| %.4f mm\n", last[centre], last.cwiseAbs().maxCoeff());
-  EXPECT_NEAR(std::abs(last[centre]), last.cwiseAbs().maxCoeff(), 0.05 * last.cwiseAbs().maxCoeff());
+  Eigen::Index deepest = 0;
+  last.cwiseAbs().maxCoeff(&deepest);
+  const double xd = xyz(static_cast<std::size_t>(deepest), 0), yd = xyz(static_cast<std::size_t>(deepest), 1);
+  std::printf("panel: centre w %.4f mm at the last station, max |w| %.4f mm at (%.0f, %.0f)\n", last[centre], last.cwiseAbs().maxCoeff(), xd, yd);
+  // The floor sags most in the pocket's middle half. On this coarse mesh it does so in a shallow W
+  // along the curved direction, 7 % deeper at x = 150 and 300 than at the centre (with exact removal,
+  // issue 29; the leaking volume fractions had left a stiffening skin and a U within 2 %).
+  EXPECT_GE(xd, 150 - 1e-6);
+  EXPECT_LE(xd, 300 + 1e-6);
+  EXPECT_GE(yd, 150 - 1e-6);
+  EXPECT_LE(yd, 300 + 1e-6);
+  EXPECT_NEAR(std::abs(last[centre]), last.cwiseAbs().maxCoeff(), 0.1 * last.cwiseAbs().maxCoeff());
   // Sag at the centre grows with removed material: compare quarter, half and end of the run.
   const double q = std::abs(B1(((ns - 1) / 4) * nt + centre, 0)), h = std::abs(B1(((ns - 1) / 2) * nt + centre, 0));
   std::printf("panel: centre |w| at 1/4, 1/2, end of the stations: %.4f, %.4f, %.4f mm\n", q, h, std::abs(last[centre]));

@@ -2,7 +2,7 @@
 // written and readable, and the headline figures match the stored ones (regression, with the
 // tolerances below). The stored figures were measured with this resolution on the development
 // machine; the loop is deterministic (seeded noise), so only floating-point drift between machines
-// is allowed for.
+// is allowed for. Issue 29's exact removal moved them (docs/levelset.md, "Regression figures").
 #include "run_checks.hpp"
 
 #include <gtest/gtest.h>
@@ -20,9 +20,9 @@ const std::string kPanel = std::string(" ") + DROM_SOURCE_DIR + "/cases/curved_p
 
 }  // namespace
 
-TEST(RunCommand, CoarseFlatPlateMatchesItsStoredFigures) { check_run("flat", kFlat, {0.94560, 6.392e-4, 0.0002, 1}); }
+TEST(RunCommand, CoarseFlatPlateMatchesItsStoredFigures) { check_run("flat", kFlat, {0.94621, 6.373e-4, 0.0003, 1}); }
 
-TEST(RunCommand, CoarseCurvedPanelMatchesItsStoredFigures) { check_run("panel", kPanel, {0.03668, 4.977e-4, 0.0023, 1}); }
+TEST(RunCommand, CoarseCurvedPanelMatchesItsStoredFigures) { check_run("panel", kPanel, {0.03686, 4.782e-4, 0.0031, 1}); }
 
 TEST(StudyCommand, SweepsCalibrationAndReportsItsBias) {
   const auto out = run_test_root() / "study";

@@ -1,6 +1,6 @@
 // Issue 3 checks 2-4: removal on a hex mesh converges; a generated pocket survives G-code; whole
 // pockets remove their exact volume.
-#include "fem/element_samples.hpp"
+#include "fem/element_geometry.hpp"
 #include "fem/structured_mesh.hpp"
 #include "levelset/gcode.hpp"
 #include "levelset/material_removal.hpp"
@@ -64,37 +64,32 @@ TEST(Removal, HexMeshDeactivatedVolumeConverges) {
   removal.sweep({{{10, 10, 2}, {40, 10, 2}}});
   const double alpha = std::asin(3.0 / 5);
   const double exact = M_PI * 4 * 13 / 3 + 25 * 30 * (M_PI / 2 - alpha - std::sin(2 * alpha) / 2);
-  // Three ways to turn the level set into element activity, at each element size:
-  //  centroid (the seed's), volume fraction from 4 x 4 x 4 samples per element (order in h), and
-  //  volume fraction sampled at the level set's band width (drom's default: h-independent).
-  double previous[3] = {0, 0, 0};
+  // Two ways to turn the level set into element activity, at each element size: the centroid (the
+  // seed's), and the volume fraction (drom's default), integrated on a voxel-fine lattice of each
+  // element and so independent of the element size.
+  double previous_centroid = 0;
   const int sizes[] = {5, 10, 20, 40};  // elements along 20 mm: h = 4, 2, 1, 0.5 mm
   for (int n : sizes) {
     const double h = 20.0 / n;
     const fem::Mesh mesh = fem::make_structured_hex_mesh(block, {n * 5 / 2, n, n / 5 < 1 ? 1 : n / 5, 1.0});
+    const fem::MeshGeometry elements(mesh);
     const auto volumes = fem::element_volumes(mesh);
-    double errors[3];
-    for (int c = 0; c < 3; ++c) {
-      const auto samples = fem::element_samples(mesh, c == 1 ? h / 4 : 2 * 3 * removal.voxel_size());
+    double errors[2];
+    for (int c = 0; c < 2; ++c) {
       std::vector<double> remaining;
-      removal.update_remaining(samples, c == 0 ? RemovalCriterion::Centroid : RemovalCriterion::VolumeFraction, remaining, false);
+      removal.update_remaining(elements, c == 0 ? RemovalCriterion::Centroid : RemovalCriterion::VolumeFraction, remaining, false);
       double gone = 0;
       for (std::size_t e = 0; e < remaining.size(); ++e) gone += (1 - remaining[e]) * volumes[e];
       errors[c] = std::abs(gone - exact) / exact;
     }
-    std::printf("h = %.2f mm: relative volume error: centroid %.4f, fraction (4^3 samples) %.5f, fraction (band samples) %.5f\n", h, errors[0],
-                errors[1], errors[2]);
-    if (previous[0] > 0)
-      std::printf("   observed orders: centroid %.2f, fraction (4^3 samples) %.2f\n", std::log2(previous[0] / errors[0]), std::log2(previous[1] / errors[1]));
+    std::printf("h = %.2f mm: relative volume error: centroid %.4f, volume fraction %.6f\n", h, errors[0], errors[1]);
+    if (previous_centroid > 0) std::printf("   observed order of the centroid criterion: %.2f\n", std::log2(previous_centroid / errors[0]));
     EXPECT_LT(errors[1], errors[0]) << "volume fraction must be the more accurate at equal size (h = " << h << ")";
-    EXPECT_LT(errors[2], 0.005) << h;
-    // The centroid criterion converges with h. Volume fractions are at the level set's own accuracy
-    // (voxel 0.05 mm) from the coarsest mesh on, so their "order" is noise around that floor:
-    // measured 3.9, 0.79, 0.046, 0.28 % with 4^3 samples, 0.13, 0.13, 0.05, 0.05 % at band spacing.
-    if (previous[0] > 0) {
-      EXPECT_LT(errors[0], previous[0]);
+    EXPECT_LT(errors[1], 0.002) << h;
+    if (previous_centroid > 0) {
+      EXPECT_LT(errors[0], previous_centroid);
     }
-    std::copy(errors, errors + 3, previous);
+    previous_centroid = errors[0];
   }
 }
 
