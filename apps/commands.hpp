@@ -1,5 +1,6 @@
 #pragma once
-// The drom subcommands. Each takes the shared options and returns the process exit code.
+// The drom subcommands. Each parses nothing itself (main.cpp does), calls the library and prints; it
+// takes the shared options and returns the process exit code.
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -37,10 +38,6 @@ int check_command(const CommandOptions& options);  // drom check
 int removal_command(const CommandOptions& options);  // drom removal
 int offline_command(const CommandOptions& options);  // drom offline
 int truth_command(const CommandOptions& options);    // drom truth
-// Both databases in one machining pass (drom run): one factorization per station serves the unit
-// profiles and the truth, and each database is the one its own command would write. The two cases
-// must differ by [truth] only; quiet, threads and stop_after are the offline options'.
-int offline_and_truth_command(const CommandOptions& offline, const CommandOptions& truth);
 int reduce_command(const CommandOptions& options);   // drom reduce
 int deviation_command(const CommandOptions& options);  // drom deviation
 

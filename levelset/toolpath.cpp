@@ -174,4 +174,25 @@ std::vector<std::vector<Eigen::Vector3d>> cutting_polylines(const Toolpath& path
   return lines;
 }
 
+TimedWaypoints timed_waypoints(const Toolpath& path, const PathTimeline& timeline) {
+  std::vector<Eigen::Vector4d> rows;
+  TimedWaypoints out;
+  for (std::size_t m = 0; m < path.moves.size(); ++m) {
+    const auto& move = path.moves[m];
+    const auto points = move_polyline(move, 0.01);
+    double along = 0;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      if (k > 0) along += (points[k] - points[k - 1]).norm();
+      if (k == 0 && !rows.empty()) continue;  // the previous move's end
+      const double t = timeline.time_at_length(timeline.move_start_length(m) + std::min(along, move.length()));
+      if (!rows.empty()) out.cutting.push_back(move.cutting());
+      rows.emplace_back(points[k].x(), points[k].y(), points[k].z(), t);
+    }
+  }
+  out.cutting.push_back(0);
+  out.xyzt.resize(static_cast<Eigen::Index>(rows.size()), 4);
+  for (std::size_t i = 0; i < rows.size(); ++i) out.xyzt.row(static_cast<Eigen::Index>(i)) = rows[i].transpose();
+  return out;
+}
+
 }  // namespace drom::levelset

@@ -65,6 +65,15 @@ std::vector<Station> stations_by_spacing(const Toolpath& path, const PathTimelin
 // A station at the end of every cutting move (the program's waypoints).
 std::vector<Station> stations_at_waypoints(const Toolpath& path, const PathTimeline& timeline);
 
+// The programmed path as a polyline of tool-tip positions and their program times (rows x, y, z, t;
+// arcs within 0.01 mm), and whether each segment (i, i + 1) belongs to a cutting move (the last row:
+// 0, past the end).
+struct TimedWaypoints {
+  Eigen::MatrixXd xyzt;
+  std::vector<char> cutting;
+};
+TimedWaypoints timed_waypoints(const Toolpath& path, const PathTimeline& timeline);
+
 // The cutting moves' polylines between path lengths s0 and s1 (what one station sweeps).
 std::vector<std::vector<Eigen::Vector3d>> cutting_polylines(const Toolpath& path, const PathTimeline& timeline, double s0, double s1,
                                                             double chord_tolerance);

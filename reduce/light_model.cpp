@@ -1,5 +1,6 @@
 #include "reduce/light_model.hpp"
 
+#include "support/file_format.hpp"
 #include "support/hdf5_reader.hpp"
 #include "support/hdf5_writer.hpp"
 #include "support/input_error.hpp"
@@ -85,7 +86,7 @@ void get_surface(const Hdf5Reader& h5, const std::string& name, const std::strin
 
 void LightModel::write(const std::filesystem::path& file) const {
   Hdf5Writer h5(file);
-  h5.attribute("format", std::string("drom light model 1"));
+  write_file_format(h5, kLightModel);
   h5.attribute("layout", std::string(
                              "w(target node n, program time t) = sum_k alpha_k U1_k(n, t), U1_k = history_<k>_space (nodes x terms) "
                              "times the rows of history_<k>_time interpolated linearly in history_times; final shape (shape node i, "
@@ -127,7 +128,7 @@ void LightModel::write(const std::filesystem::path& file) const {
 LightModel LightModel::read(const std::filesystem::path& file) {
   const Hdf5Reader h5(file);
   auto fail = [&](const std::string& what) { return InputError(file.string() + ": " + what); };
-  if (h5.text_attribute("format") != "drom light model 1") throw fail("not a drom light model (attribute format)");
+  check_file_format(h5, kLightModel);
   LightModel m;
   m.case_toml = h5.text_attribute("case");
   m.database_hash = h5.text_attribute("database_hash");

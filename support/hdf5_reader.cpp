@@ -16,6 +16,8 @@ Hdf5Reader::~Hdf5Reader() { H5Fclose(handle_); }
 
 bool Hdf5Reader::has(const std::string& name) const { return H5Lexists(handle_, name.c_str(), H5P_DEFAULT) > 0; }
 
+bool Hdf5Reader::has_attribute(const std::string& name) const { return H5Aexists(handle_, name.c_str()) > 0; }
+
 Hdf5Matrix Hdf5Reader::matrix(const std::string& name) const {
   if (!has(name)) throw InputError(path_.string() + ": dataset '" + name + "' is missing");
   const hid_t set = H5Dopen2(handle_, name.c_str(), H5P_DEFAULT);

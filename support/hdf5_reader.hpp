@@ -21,6 +21,8 @@ class Hdf5Reader {
   Hdf5Reader& operator=(const Hdf5Reader&) = delete;
 
   bool has(const std::string& name) const;
+  bool has_attribute(const std::string& name) const;
+  const std::filesystem::path& path() const { return path_; }
   Hdf5Matrix matrix(const std::string& name) const;  // 1-D datasets come back as rows x 1
   std::string text_attribute(const std::string& name) const;
   double number_attribute(const std::string& name) const;

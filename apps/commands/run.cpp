@@ -1,124 +1,54 @@
-// drom run: the main job, the seed's §3.5 experiment (design.md §6-§7).
-//   1. the case at the run's scale ([run] scale = "quick": a few minutes on two cores; "seed": as written);
-//   2. offline snapshots of the basis's unit profiles, and the light model (drom offline, drom reduce);
-//   3. the truth: the same machining with the [truth] profile, a profile outside the basis;
-//   4. the closed loop twice, on the same sensor noise: offsets commanded (with correction) and held
-//      at 0 (without), the predictor learning in both;
-//   5. outputs: per-pass errors, final-shape predictions against the truth, offsets, the corrected
-//      program, summary.json, and a short table on stdout.
-// Stages 2-3 are kept under --out and reused while the case that made them is unchanged, so a rerun
-// with other sensor or control settings costs only the loop.
-#include "apps/closed_loop_report.hpp"
-#include "apps/closed_loop_setup.hpp"
+// drom run and drom study: the closed loop on a case (loop/closed_loop_run.hpp, closed_loop_study.hpp).
 #include "apps/commands.hpp"
-#include "apps/summary.hpp"
-#include "support/resources.hpp"
+#include "loop/closed_loop_run.hpp"
+#include "loop/closed_loop_study.hpp"
 
-#include <chrono>
 #include <cstdio>
-#include <iostream>
-#include <thread>
 
 namespace drom::app {
 
 namespace {
 
-nlohmann::json loop_json(const online::ClosedLoopResult& r) {
-  nlohmann::json passes = nlohmann::json::array();
-  for (const auto& p : r.passes)
-    passes.push_back({{"pass", p.pass},
-                      {"mean_abs_error_mm", p.mean_abs_error},
-                      {"max_abs_error_mm", p.max_abs_error},
-                      {"max_abs_distortion_mm", p.max_abs_distortion},
-                      {"final_shape_max_error_mm", p.shape_max_error},
-                      {"final_shape_rms_error_mm", p.shape_rms_error},
-                      {"band95_coverage", p.shape_band_coverage},
-                      {"learned", p.learned},
-                      {"profiles", p.profiles},
-                      {"points_used", p.points_used}});
-  return {{"passes", passes},
-          {"profiles", r.profiles},
-          {"points", {{"used", r.points.used}, {"used_on_stock_top", r.points.used_top}, {"outside_target", r.points.outside}, {"not_yet_cut", r.points.not_yet_cut}, {"invalid", r.points.invalid},
-                      {"out_of_range", r.points.out_of_range}}},
-          {"learned_at_program_time_s", r.learned_at},
-          {"calibration_bias", {{"sampled_points", r.calibration.points}, {"rms_bias_mm", r.calibration.rms_bias},
-                                {"rms_slope_times_offset_mm", r.calibration.rms_slope_times_offset}, {"ratio_bias_to_slope_times_offset", r.calibration.ratio}}},
-          {"alpha", std::vector<double>(r.estimate.alpha.data(), r.estimate.alpha.data() + r.estimate.alpha.size())},
-          {"seconds", r.seconds}};
-}
+loop::RunOptions run_options(const CommandOptions& options) { return {options.out, options.quiet, options.threads}; }
 
 }  // namespace
 
 int run_command(const CommandOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  const Case c = load_run_case(options);
-  std::filesystem::create_directories(options.out);
-  const ClosedLoopInputs in = prepare_closed_loop(c, options);
+  const cases::Case c = loop::load_run_case(options.case_path, options.overrides);
+  const loop::RunResult r = loop::run_closed_loop(c, run_options(options));
+  if (options.quiet) return 0;
+  const loop::Headline& h = r.headline;
+  std::printf("drom run: %s (%s scale), model r = %d, %zu passes, sensor noise %.3g mm\n", c.name.c_str(), c.run_scale.c_str(), r.model_rank,
+              r.corrected.passes.size(), c.sensor_noise);
+  std::printf("  %-52s %s\n", "figure", "value");
+  std::printf("  %-52s %.4f mm\n", "path error without correction, max", h.uncorrected_max);
+  if (h.learned_at >= 0) std::printf("  %-52s %.1f s (pass %d)\n", "learned at program time", h.learned_at, h.learned_pass);
+  else std::printf("  %-52s never\n", "learned at program time");
+  std::printf("  %-52s %.2e mm (target %.0e)\n", "path error with correction, max from pass 3", h.corrected_max_from_3, c.path_tolerance);
+  std::printf("  %-52s %.2e mm\n", "path error with correction, mean from pass 3", h.corrected_mean_from_3);
+  const std::string shape_label = "final-shape max error, end of pass " + std::to_string(c.shape_pass);
+  std::printf("  %-52s %.4f mm (target %.3g)\n", shape_label.c_str(), h.shape_error_at_pass, c.shape_tolerance);
+  std::printf("  %-52s %.4f mm (95 %% band covers %.1f %%)\n", "final-shape max error, end", h.shape_error_end, 100 * h.band_coverage_end);
+  if (r.corrected.calibration.points > 0)
+    std::printf("  %-52s %.2e mm (slope x offset %.2e mm, ratio %.2f)\n", "calibration error's bias on the measured floor, RMS", r.corrected.calibration.rms_bias,
+                r.corrected.calibration.rms_slope_times_offset, r.corrected.calibration.ratio);
+  std::printf("  outputs in %s: passes.csv/.png, final_shape_error.png, final_shape.pvd, offsets.csv, corrected_program.nc, summary.json (%.0f s)\n",
+              options.out.string().c_str(), r.summary["timing_s"]["total"].get<double>());
+  return 0;
+}
 
-  // The two loops share everything but the correction; each has its own copy of the truth.
-  online::ClosedLoopSettings with = loop_settings(c), without = with;
-  with.correct = true;
-  without.correct = false;
-  const online::ClosedLoop corrected_loop(in.model, predictor_settings(c, in.model), with), uncorrected_loop(in.model, predictor_settings(c, in.model), without);
-  const TruthPlay truth_a = in.play(), truth_b = in.play();
-  if (!options.quiet) std::cerr << "drom run: the closed loop, with and without correction (" << corrected_loop.passes().size() << " passes)\n";
-  online::ClosedLoopResult corrected, uncorrected;
-  std::thread side([&] { uncorrected = uncorrected_loop.run(truth_b.part); });
-  corrected = corrected_loop.run(truth_a.part, [&](double f) {
-    if (!options.quiet) std::fprintf(stderr, "\r  %3.0f %%", 100 * f);
-  });
-  side.join();
-  if (!options.quiet) std::fprintf(stderr, "\r  100 %%\n");
-
-  auto files = write_loop_outputs(options.out, c, in.model, truth_a.part, corrected, uncorrected);
-  files.push_back("summary.json");
-  const Headline h = headline(corrected, uncorrected, c.shape_pass);
-  nlohmann::json summary = {
-      {"command", "run"},
-      {"case", c.name},
-      {"case_origin", c.origin},
-      {"scale", c.run_scale},
-      {"headline", h.to_json()},
-      {"targets", {{"path_tolerance_mm", c.path_tolerance}, {"shape_tolerance_mm", c.shape_tolerance},
-                   {"path_error_from_pass3_met", h.corrected_max_from_3 <= c.path_tolerance},
-                   {"shape_pass", c.shape_pass},
-                   {"final_shape_by_target_pass_met", h.shape_error_at_pass <= c.shape_tolerance}}},
-      {"model", {{"rank", in.model.rank()}, {"error_bound_mm", in.model.error_bound()}, {"tolerance_mm", in.model.tolerance}}},
-      {"truth", {{"amplitude", c.truth_amplitude}, {"max_abs_final_vertical_mm", in.truth.final_displacement.row(2).cwiseAbs().maxCoeff()},
-                 {"max_abs_target_w_mm", in.truth.target_history.cwiseAbs().maxCoeff()}}},
-      {"sensor", {{"noise_mm", c.sensor_noise}, {"period_s", c.sensor_period}, {"angle_deg", c.sensor_angle}, {"offset_mm", c.sensor_offset},
-                  {"offset_error_mm", c.sensor_offset_error}, {"angle_error_deg", c.sensor_angle_error}}},
-      {"sync", {{"desync_s", c.desync}, {"feed_override", c.feed_override}}},
-      {"control", {{"refresh_rate_hz", c.refresh_rate}, {"max_offset_rate_mm_s", c.max_offset_rate}, {"learning_tolerance_mm", c.learning_tolerance}}},
-      {"corrected", loop_json(corrected)},
-      {"uncorrected", loop_json(uncorrected)},
-      {"timing_s", {{"offline", in.offline_seconds}, {"truth", in.truth_seconds}, {"reduce", in.reduce_seconds}, {"loop_corrected", corrected.seconds},
-                    {"loop_uncorrected", uncorrected.seconds}, {"total", seconds_since(start)},
-                    {"offline_and_truth_in_one_pass", in.one_pass}}},
-      {"reused", {{"offline", in.reused_offline}, {"truth", in.reused_truth}}},
-      {"peak_memory_mb", static_cast<double>(peak_memory_bytes()) / 1048576.0},
-      {"machine", machine_info()},
-      {"files", files}};
-  write_summary(options.out, summary);
-
-  if (!options.quiet) {
-    std::printf("drom run: %s (%s scale), model r = %d, %zu passes, sensor noise %.3g mm\n", c.name.c_str(), c.run_scale.c_str(), in.model.rank(),
-                corrected.passes.size(), c.sensor_noise);
-    std::printf("  %-52s %s\n", "figure", "value");
-    std::printf("  %-52s %.4f mm\n", "path error without correction, max", h.uncorrected_max);
-    if (h.learned_at >= 0) std::printf("  %-52s %.1f s (pass %d)\n", "learned at program time", h.learned_at, h.learned_pass);
-    else std::printf("  %-52s never\n", "learned at program time");
-    std::printf("  %-52s %.2e mm (target %.0e)\n", "path error with correction, max from pass 3", h.corrected_max_from_3, c.path_tolerance);
-    std::printf("  %-52s %.2e mm\n", "path error with correction, mean from pass 3", h.corrected_mean_from_3);
-    const std::string shape_label = "final-shape max error, end of pass " + std::to_string(c.shape_pass);
-    std::printf("  %-52s %.4f mm (target %.3g)\n", shape_label.c_str(), h.shape_error_at_pass, c.shape_tolerance);
-    std::printf("  %-52s %.4f mm (95 %% band covers %.1f %%)\n", "final-shape max error, end", h.shape_error_end, 100 * h.band_coverage_end);
-    if (corrected.calibration.points > 0)
-      std::printf("  %-52s %.2e mm (slope x offset %.2e mm, ratio %.2f)\n", "calibration error's bias on the measured floor, RMS", corrected.calibration.rms_bias,
-                  corrected.calibration.rms_slope_times_offset, corrected.calibration.ratio);
-    std::printf("  outputs in %s: passes.csv/.png, final_shape_error.png, final_shape.pvd, offsets.csv, corrected_program.nc, summary.json (%.0f s)\n",
-                options.out.string().c_str(), seconds_since(start));
-  }
+int study_command(const CommandOptions& options) {
+  const cases::Case base = loop::load_run_case(options.case_path, options.overrides);
+  const auto summary = loop::run_study(base, options.study_parameter, options.study_values, run_options(options));
+  if (options.quiet) return 0;
+  std::printf("drom study: %s, %s\n", base.name.c_str(), summary["parameter_label"].get<std::string>().c_str());
+  std::printf("  %12s  %14s  %14s  %14s  %14s\n", options.study_parameter.c_str(), "uncorr. max", "corr. max p3+", ("shape p" + std::to_string(base.shape_pass)).c_str(),
+              "shape end");
+  for (const auto& r : summary["rows"])
+    std::printf("  %12.6g  %14.3e  %14.3e  %14.4f  %14.4f\n", r["value"].get<double>(), r["path_error_uncorrected_max_mm"].get<double>(),
+                r["path_error_corrected_max_from_pass3_mm"].get<double>(), r["final_shape_max_error_end_of_target_pass_mm"].get<double>(),
+                r["final_shape_max_error_end_mm"].get<double>());
+  std::printf("  outputs in %s: study.csv, study.png, summary.json\n", options.out.string().c_str());
   return 0;
 }
 

@@ -1,0 +1,37 @@
+#pragma once
+// The closed loop's outputs (docs/outputs.md, "drom run"): per-pass tables, plots, final-shape VTK,
+// the offset stream, the corrected program, and the headline figures both drom run and drom study
+// report.
+#include "case/case.hpp"
+#include "online/closed_loop.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+
+namespace drom::loop {
+
+struct Headline {
+  double learned_at = -1;          // program time (s); -1: never
+  int learned_pass = 0;            // the pass during which it learned (0: before any)
+  double uncorrected_max = 0;      // mm, over all passes
+  double corrected_max_from_3 = 0; // mm, path error from pass 3 on (with correction)
+  double corrected_mean_from_3 = 0;
+  int shape_pass = 3;              // the pass whose end the final-shape target looks at
+  double shape_error_at_pass = 0;  // mm, final-shape max error at the end of shape_pass
+  double shape_error_end = 0, shape_rms_end = 0, band_coverage_end = 0;
+  nlohmann::json to_json() const;
+};
+
+Headline headline(const online::ClosedLoopResult& corrected, const online::ClosedLoopResult& uncorrected, int shape_pass);
+
+// Writes passes.csv/.png, path_samples.csv, final_shape_error.csv/.png, final_shape_pass_<k>.vtu
+// (+ .pvd), offsets.csv and corrected_program.nc into `out`. Returns the files written.
+std::vector<std::string> write_loop_outputs(const std::filesystem::path& out, const cases::Case& c, const reduce::LightModel& model, const online::TruePart& truth,
+                                            const online::ClosedLoopResult& corrected, const online::ClosedLoopResult& uncorrected);
+
+// The corrected program: the model's path with the commanded offsets written into Z on the floor.
+std::string corrected_gcode(const reduce::LightModel& model, const std::vector<online::Pass>& passes, const std::vector<online::OffsetCommand>& offsets,
+                            const std::string& title);
+
+}  // namespace drom::loop

@@ -1,0 +1,63 @@
+#pragma once
+// What drom run and drom study share: the case at the run's scale, the offline database, the light
+// model and the truth run under --out (each computed once and reused while the case that made it is
+// unchanged), and the closed loop's settings from the case.
+#include "case/case.hpp"
+#include "levelset/part_shape.hpp"
+#include "online/closed_loop.hpp"
+#include "reduce/light_model.hpp"
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace drom::loop {
+
+// The case as drom run runs it: with [run] scale = "quick", run.quick's overrides first, then the
+// user's (so --set wins).
+cases::Case load_run_case(const std::optional<std::filesystem::path>& path, const std::vector<std::string>& overrides);
+
+// Where and how drom run and drom study work.
+struct RunOptions {
+  std::filesystem::path out = "out";  // offline/, truth/ and model/ are kept here and reused
+  bool quiet = false;                 // no progress on stderr
+  int threads = 0;                    // the offline job's workers; 0: one per hardware thread
+};
+
+// The truth run, as the closed loop plays it.
+struct TruthRun {
+  Eigen::MatrixXd target_history;        // target nodes x stations (mm)
+  Eigen::MatrixXd top_history;           // the model's top nodes x stations (mm), held after each node's cut; empty without a top
+  Eigen::VectorXd station_times;
+  Eigen::Matrix3Xd final_displacement;   // at the model's final-shape nodes
+  double amplitude = 1;                  // the case's truth.amplitude it was computed with
+};
+
+// One loop's own copy of the truth (a SurfaceHistory caches, so loops in parallel each need one).
+struct TruthPlay {
+  std::unique_ptr<online::SurfaceHistory> history, top_history;
+  online::TruePart part;
+};
+
+struct ClosedLoopInputs {
+  reduce::LightModel model;
+  TruthRun truth;
+  levelset::PartShape shape;
+  // The truth with its stresses multiplied by `factor` (displacements are linear in them).
+  TruthPlay play(double factor = 1) const;
+  double offline_seconds = 0, truth_seconds = 0, reduce_seconds = 0;  // this invocation's
+  bool one_pass = false;  // offline and truth computed in one machining pass (its time in offline_seconds)
+  bool reused_offline = false, reused_truth = false;
+};
+
+// Runs (or reuses) out/offline, out/model and out/truth for the case. Progress on stderr unless quiet.
+ClosedLoopInputs prepare_closed_loop(const cases::Case& c, const RunOptions& options);
+
+// The measurement sigma is the sensor's noise and the model's own error bound together: a noise-free
+// sensor still sees what the model cannot represent, and the band should say so.
+online::PredictorSettings predictor_settings(const cases::Case& c, const reduce::LightModel& model);
+online::ClosedLoopSettings loop_settings(const cases::Case& c);
+
+}  // namespace drom::loop
