@@ -2,6 +2,7 @@
 #include "apps/commands.hpp"
 #include "support/heap_policy.hpp"
 #include "support/input_error.hpp"
+#include "support/version.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -13,7 +14,7 @@ int main(int argc, char** argv) {
   drom::keep_freed_memory();
   CLI::App app{"drom: predicts and corrects the distortion of thin parts while they are machined"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "drom 0.1.0");
+  app.set_version_flag("--version", std::string("drom ") + drom::kVersion);
 
   drom::app::CommandOptions options;
   std::string case_path;
