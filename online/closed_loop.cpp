@@ -62,28 +62,129 @@ std::optional<double> true_height(const TruePart& truth, const reduce::SurfaceMe
   return *top + (p ? truth.target->at(*p, t) : 0.0);
 }
 
-ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void(double)>& progress) const {
-  const auto start = std::chrono::steady_clock::now();
-  if (!truth.target || truth.final_displacement.cols() != model_.shape_nodes.cols())
+LoopMachine::LoopMachine(const reduce::LightModel& model, const TruePart& truth, ClosedLoopSettings settings)
+    : model_(model), truth_(truth), settings_(std::move(settings)), passes_(floor_passes(model)), rng_(settings_.seed) {
+  if (!(settings_.period > 0) || !(settings_.refresh_rate > 0) || !(settings_.feed_override > 0) || !(settings_.desync >= 0))
+    throw std::invalid_argument("closed loop: period, refresh rate and feed override must be > 0, desync >= 0");
+  if (!truth.target || truth.final_displacement.cols() != model.shape_nodes.cols())
     throw std::invalid_argument("closed loop: the truth must give the target's history and the final shape at the model's shape nodes");
-  const SurfaceHistory& w_true = *truth.target;
-  const reduce::SurfaceMesh& target = model_.target;
-  Predictor predictor(model_, predictor_settings_);
-  std::vector<int> sync = settings_.sync;
-  if (sync.empty())
-    for (Eigen::Index i = 0; i < model_.path.rows(); ++i) sync.push_back(static_cast<int>(i));
-  DeadReckoning reckoning(model_.path, sync);
-  MachinedFloor floor(model_);
-  std::mt19937 rng(settings_.seed);
-
+  sync_ = settings_.sync;
+  if (sync_.empty())
+    for (Eigen::Index i = 0; i < model.path.rows(); ++i) sync_.push_back(static_cast<int>(i));
+  reckoning_ = std::make_unique<DeadReckoning>(model.path, sync_);
+  floor_ = std::make_unique<MachinedFloor>(model);
   // One step is the shorter of the two periods; the longer is a whole number of steps.
   const double refresh = 1 / settings_.refresh_rate;
-  const double step = std::min(settings_.period, refresh);
-  const long scan_every = std::max(1L, std::lround(settings_.period / step)), refresh_every = std::max(1L, std::lround(refresh / step));
-  const double program_end = model_.path(model_.path.rows() - 1, 3);
-  const double radius = model_.tool_radius;
-  const bool ball = model_.tool_shape == reduce::ToolShape::Ball;
+  step_ = std::min(settings_.period, refresh);
+  scan_every_ = std::max(1L, std::lround(settings_.period / step_));
+  refresh_every_ = std::max(1L, std::lround(refresh / step_));
+  const double program_end = model.path(model.path.rows() - 1, 3);
+  steps_ = static_cast<long>(std::ceil(program_end / settings_.feed_override / step_)) + 1;
+  calibrating_ = settings_.errors.offset_error.head<2>().norm() > 0 || settings_.errors.angle_error_deg != 0;
+}
 
+LoopMachine::Step LoopMachine::advance(long k) {
+  const double program_end = model_.path(model_.path.rows() - 1, 3);
+  Step s;
+  s.index = k;
+  s.clock = static_cast<double>(k) * step_;
+  s.true_time = std::min(program_end, s.clock * settings_.feed_override);
+  while (next_edge_ < sync_.size() && model_.path(sync_[next_edge_], 3) / settings_.feed_override + settings_.desync <= s.clock) {
+    reckoning_->edge(sync_[next_edge_], model_.path(sync_[next_edge_], 3) / settings_.feed_override + settings_.desync);
+    ++next_edge_;
+  }
+  s.tip = path_position(model_.path, s.true_time);
+  s.believed_time = reckoning_->program_time(s.clock);
+  s.believed_tip = reckoning_->position_at_program_time(s.believed_time);
+  s.pass = pass_of(passes_, s.true_time);
+
+  // The contact point's altitude error against the target surface where it truly is.
+  const reduce::SurfaceMesh& target = model_.target;
+  const bool ball = model_.tool_shape == reduce::ToolShape::Ball;
+  if (s.pass > 0) {
+    if (const auto p = target.locate(s.tip.x(), s.tip.y(), -1, ball)) {
+      const Eigen::VectorXd& w_now = truth_.target->nodal(s.true_time);
+      const double w = target.interpolate(*p, w_now)[0];
+      double required = w;  // the offset that would put the tool on the true target surface
+      if (ball) {
+        double wx = 0, wy = 0, sx = 0, sy = 0;
+        for (int n = 0; n < p->count; ++n) {
+          const auto i = static_cast<std::size_t>(n);
+          wx += p->dx[i] * w_now[p->nodes[i]], wy += p->dy[i] * w_now[p->nodes[i]];
+          sx += p->dx[i] * target.nodes()(2, p->nodes[i]), sy += p->dy[i] * target.nodes()(2, p->nodes[i]);
+        }
+        required += model_.tool_radius * (std::sqrt(1 + (sx + wx) * (sx + wx) + (sy + wy) * (sy + wy)) - std::sqrt(1 + sx * sx + sy * sy));
+      }
+      s.on_target = true;
+      s.sample.clock = s.clock, s.sample.program_time = s.true_time, s.sample.x = s.tip.x(), s.sample.y = s.tip.y();
+      s.sample.offset = applied_, s.sample.distortion = w;
+      s.sample.error = applied_ - required;  // against the ideal path: the program moved with the true target surface
+      s.sample.pass = s.pass;
+    }
+  }
+  s.refresh = k % refresh_every_ == 0;
+  s.setpoint_time = s.believed_time + 0.5 / settings_.refresh_rate * settings_.feed_override;
+  s.scan = k % scan_every_ == 0;
+  current_ = s;
+  return s;
+}
+
+void LoopMachine::command(double offset) {
+  applied_ = offset;
+  floor_->command(current_.true_time, offset);
+}
+
+std::vector<MeasuredPoint> LoopMachine::scan() {
+  const reduce::SurfaceMesh& target = model_.target;
+  const double t_true = current_.true_time;
+  int hint = -1, top_hint = -1;
+  const HeightField read = [&](double x, double y) { return true_height(truth_, target, *floor_, x, y, t_true, hint, top_hint); };
+  auto points = online::scan(settings_.sheet, settings_.errors, current_.believed_tip, current_.tip, read, rng_);
+  if (calibrating_ && profiles_ % 10 == 0) {
+    // What a calibration error does to the surface the predictor fits as the floor (seed §2.3.2):
+    // noise-free floor heights where the sheet truly is and where it is believed to be.
+    const HeightField read_floor = [&](double x, double y) -> std::optional<double> {
+      const auto p = target.locate(x, y, hint, false);
+      if (!p) return std::nullopt;
+      hint = p->face;
+      return floor_->surface(x, y, *p, *truth_.target, t_true);
+    };
+    LaserSheet actual = settings_.sheet;
+    actual.offset += settings_.errors.offset_error;
+    actual.angle_deg += settings_.errors.angle_error_deg;
+    const auto where = actual.footprint(current_.tip), thought = settings_.sheet.footprint(current_.believed_tip);
+    for (std::size_t i = 0; i < where.size(); ++i) {
+      const Eigen::Vector2d d = where[i] - thought[i];
+      if (d.norm() < 1e-9) continue;
+      const Eigen::Vector2d u = d.normalized() * 0.5;
+      const auto a = read_floor(where[i].x(), where[i].y()), b = read_floor(thought[i].x(), thought[i].y());
+      const auto b_plus = read_floor(thought[i].x() + u.x(), thought[i].y() + u.y()), b_minus = read_floor(thought[i].x() - u.x(), thought[i].y() - u.y());
+      if (!a || !b || !b_plus || !b_minus) continue;
+      const double bias = *a - *b, expected = (*b_plus - *b_minus) / 1.0 * d.norm();
+      sum_be_ += bias * expected, sum_ee_ += expected * expected, sum_bb_ += bias * bias;
+      ++calibration_points_;
+    }
+  }
+  ++profiles_;
+  return points;
+}
+
+CalibrationBias LoopMachine::calibration() const {
+  CalibrationBias c;
+  c.points = calibration_points_;
+  if (calibration_points_ > 0) {
+    const auto n = static_cast<double>(calibration_points_);
+    c.rms_bias = std::sqrt(sum_bb_ / n);
+    c.rms_slope_times_offset = std::sqrt(sum_ee_ / n);
+    c.ratio = sum_ee_ > 0 ? sum_be_ / sum_ee_ : 0;
+  }
+  return c;
+}
+
+ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void(double)>& progress) const {
+  const auto start = std::chrono::steady_clock::now();
+  LoopMachine machine(model_, truth, settings_);
+  Predictor predictor(model_, predictor_settings_);
   ClosedLoopResult result;
   result.passes.resize(passes_.size());
   for (std::size_t p = 0; p < passes_.size(); ++p) {
@@ -91,108 +192,52 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
     result.passes[p].start = passes_[p].start;
     result.passes[p].end = passes_[p].end;
   }
-  std::size_t next_edge = 0, next_shape = 0;
-  const bool calibrating = settings_.errors.offset_error.head<2>().norm() > 0 || settings_.errors.angle_error_deg != 0;
-  double sum_be = 0, sum_ee = 0, sum_bb = 0;
-  double applied = 0;
-  const long steps = static_cast<long>(std::ceil(program_end / settings_.feed_override / step)) + 1;
+  std::size_t next_shape = 0;
+  const long steps = machine.steps();
   for (long k = 0; k <= steps; ++k) {
-    const double clock = static_cast<double>(k) * step, t_true = std::min(program_end, clock * settings_.feed_override);
-    while (next_edge < sync.size() && model_.path(sync[next_edge], 3) / settings_.feed_override + settings_.desync <= clock) {
-      reckoning.edge(sync[next_edge], model_.path(sync[next_edge], 3) / settings_.feed_override + settings_.desync);
-      ++next_edge;
-    }
-    const Eigen::Vector3d tip = path_position(model_.path, t_true);
-    const Eigen::VectorXd& w_now = w_true.nodal(t_true);
+    const LoopMachine::Step step = machine.advance(k);
 
-    // 1. The cut, and the contact point's altitude error against the target surface where it truly is.
-    const int pass = pass_of(passes_, t_true);
-    if (pass > 0) {
-      if (const auto p = target.locate(tip.x(), tip.y(), -1, ball)) {
-        const double w = target.interpolate(*p, w_now)[0];
-        double required = w;  // the offset that would put the tool on the true target surface
-        if (ball) {
-          double wx = 0, wy = 0, sx = 0, sy = 0;
-          for (int n = 0; n < p->count; ++n) {
-            const auto i = static_cast<std::size_t>(n);
-            wx += p->dx[i] * w_now[p->nodes[i]], wy += p->dy[i] * w_now[p->nodes[i]];
-            sx += p->dx[i] * target.nodes()(2, p->nodes[i]), sy += p->dy[i] * target.nodes()(2, p->nodes[i]);
-          }
-          required += radius * (std::sqrt(1 + (sx + wx) * (sx + wx) + (sy + wy) * (sy + wy)) - std::sqrt(1 + sx * sx + sy * sy));
-        }
-        LoopSample s;
-        s.clock = clock, s.program_time = t_true, s.x = tip.x(), s.y = tip.y();
-        s.offset = applied, s.distortion = w;
-        s.offset_sd = predictor.predicted_offset_sd(t_true);
-        s.error = applied - required;  // against the ideal path: the program moved with the true target surface
-        s.pass = pass;
-        s.learned = result.learned_at >= 0;
-        result.samples.push_back(s);
-        auto& f = result.passes[static_cast<std::size_t>(pass - 1)];
-        ++f.samples;
-        f.mean_abs_error += std::abs(s.error);
-        f.max_abs_error = std::max(f.max_abs_error, std::abs(s.error));
-        f.max_abs_distortion = std::max(f.max_abs_distortion, std::abs(w));
-      }
+    // 1. The cut, and its error against the target where it truly is.
+    if (step.on_target) {
+      LoopSample s = step.sample;
+      s.offset_sd = predictor.predicted_offset_sd(step.true_time);
+      s.learned = result.learned_at >= 0;
+      result.samples.push_back(s);
+      auto& f = result.passes[static_cast<std::size_t>(step.pass - 1)];
+      ++f.samples;
+      f.mean_abs_error += std::abs(s.error);
+      f.max_abs_error = std::max(f.max_abs_error, std::abs(s.error));
+      f.max_abs_distortion = std::max(f.max_abs_distortion, std::abs(s.distortion));
     }
 
     // 2. A new setpoint, for the middle of the interval it will hold.
-    const double t_believed = reckoning.program_time(clock);
-    if (k % refresh_every == 0) {
-      const double target_time = t_believed + 0.5 * refresh * settings_.feed_override;
-      applied = settings_.correct ? predictor.tool_offset(target_time) : 0.0;
-      floor.command(t_true, applied);
-      predictor.record_offset(t_believed, applied);
-      result.offsets.push_back({clock, t_believed, t_true, applied});
+    if (step.refresh) {
+      const double applied = settings_.correct ? predictor.tool_offset(step.setpoint_time) : 0.0;
+      machine.command(applied);
+      predictor.record_offset(step.believed_time, applied);
+      result.offsets.push_back({step.clock, step.believed_time, step.true_time, applied});
     }
 
-    // 3. A profile: readings from where the sheet truly is, placed where the predictor believes.
-    if (k % scan_every == 0) {
-      int hint = -1, top_hint = -1;
-      const HeightField read = [&](double x, double y) { return true_height(truth, target, floor, x, y, t_true, hint, top_hint); };
-      const Eigen::Vector3d believed = reckoning.position_at_program_time(t_believed);
-      const auto points = scan(settings_.sheet, settings_.errors, believed, tip, read, rng);
-      if (calibrating && result.profiles % 10 == 0) {
-        // Noise-free floor heights only: the rule is about the surface the predictor fits as the floor.
-        const HeightField read_floor = [&](double x, double y) -> std::optional<double> {
-          const auto p = target.locate(x, y, hint, false);
-          if (!p) return std::nullopt;
-          hint = p->face;
-          return floor.surface(x, y, *p, w_true, t_true);
-        };
-        LaserSheet actual = settings_.sheet;
-        actual.offset += settings_.errors.offset_error;
-        actual.angle_deg += settings_.errors.angle_error_deg;
-        const auto where = actual.footprint(tip), thought = settings_.sheet.footprint(believed);
-        for (std::size_t i = 0; i < where.size(); ++i) {
-          const Eigen::Vector2d d = where[i] - thought[i];
-          if (d.norm() < 1e-9) continue;
-          const Eigen::Vector2d u = d.normalized() * 0.5;
-          const auto a = read_floor(where[i].x(), where[i].y()), b = read_floor(thought[i].x(), thought[i].y());
-          const auto b_plus = read_floor(thought[i].x() + u.x(), thought[i].y() + u.y()), b_minus = read_floor(thought[i].x() - u.x(), thought[i].y() - u.y());
-          if (!a || !b || !b_plus || !b_minus) continue;
-          const double bias = *a - *b, expected = (*b_plus - *b_minus) / 1.0 * d.norm();
-          sum_be += bias * expected, sum_ee += expected * expected, sum_bb += bias * bias;
-          ++result.calibration.points;
-        }
-      }
+    // 3. A profile.
+    if (step.scan) {
+      const auto points = machine.scan();
       ToolPose pose;
-      pose.tip = believed;
-      pose.applied_offset = applied;
-      const ProfileReport report = predictor.add_profile(t_believed, pose, points);
+      pose.tip = step.believed_tip;
+      pose.applied_offset = machine.applied();
+      const ProfileReport report = predictor.add_profile(step.believed_time, pose, points);
       ++result.profiles;
       result.points.used += report.used, result.points.used_top += report.used_top, result.points.outside += report.outside, result.points.not_yet_cut += report.not_yet_cut;
       result.points.invalid += report.invalid, result.points.out_of_range += report.out_of_range;
-      if (pass > 0) {
-        auto& f = result.passes[static_cast<std::size_t>(pass - 1)];
+      if (step.pass > 0) {
+        auto& f = result.passes[static_cast<std::size_t>(step.pass - 1)];
         ++f.profiles;
         f.points_used += report.used;
       }
-      if (result.learned_at < 0 && predictor.learned()) result.learned_at = t_true;
+      if (result.learned_at < 0 && predictor.learned()) result.learned_at = step.true_time;
     }
 
     // 4. At each pass's end: the final shape predicted now, against the truth's.
-    while (next_shape < passes_.size() && (t_true >= passes_[next_shape].end || k == steps)) {
+    while (next_shape < passes_.size() && (step.true_time >= passes_[next_shape].end || k == steps)) {
       FinalShape shape = predictor.final_shape();
       result.estimates.push_back(predictor.estimate());
       auto& f = result.passes[next_shape];
@@ -207,12 +252,7 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
     }
     if (progress && k % std::max(1L, steps / 100) == 0) progress(static_cast<double>(k) / static_cast<double>(steps));
   }
-  if (result.calibration.points > 0) {
-    const auto n = static_cast<double>(result.calibration.points);
-    result.calibration.rms_bias = std::sqrt(sum_bb / n);
-    result.calibration.rms_slope_times_offset = std::sqrt(sum_ee / n);
-    result.calibration.ratio = sum_ee > 0 ? sum_be / sum_ee : 0;
-  }
+  result.calibration = machine.calibration();
   result.estimate = predictor.estimate();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

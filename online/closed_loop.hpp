@@ -15,6 +15,7 @@
 //   2. on the refresh instants, the offset for the middle of the coming hold interval is commanded;
 //   3. on the sensor instants, a profile is read from the true surfaces and handed to the predictor.
 // At the end of every pass the predictor's final shape is compared with the truth's.
+#include "online/dead_reckoning.hpp"
 #include "online/laser_sheet.hpp"
 #include "online/machined_floor.hpp"
 #include "online/predictor.hpp"
@@ -24,6 +25,8 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <random>
 #include <optional>
 #include <vector>
 
@@ -116,6 +119,66 @@ struct ClosedLoopResult {
   Estimate estimate;               // at the end
   CalibrationBias calibration;     // empty without calibration errors
   double seconds = 0;
+};
+
+// The closed loop's world, stepped in the controller's clock: the machine moving the tool along the
+// program (at the feed override), the program's waypoint edges reaching the synchronizer (late by the
+// desync), the real part under the tool, the floor the tool cuts with the offsets commanded, and the
+// laser sheet on the spindle (its calibration errors and noise). A controller drives it: at each step
+// it commands an offset when a refresh falls due and takes the profile the sheet reads when a scan
+// does. ClosedLoop::run is that controller with a Predictor; the Python module drives the same
+// machine with its own (so both give the same errors, bit for bit).
+class LoopMachine {
+ public:
+  // `truth` must outlive the machine.
+  LoopMachine(const reduce::LightModel& model, const TruePart& truth, ClosedLoopSettings settings);
+
+  struct Step {
+    long index = 0;
+    double clock = 0;          // controller time (s)
+    double true_time = 0;      // program time the tool has truly reached
+    double believed_time = 0;  // program time the synchronizer believes
+    Eigen::Vector3d tip = Eigen::Vector3d::Zero(), believed_tip = Eigen::Vector3d::Zero();
+    int pass = 0;              // 1-based pass the tool is on the floor in; 0: off the floor
+    bool on_target = false;    // the tool is over the target surface on a pass: `sample` holds its error
+    LoopSample sample;         // with the offset in force before this step's refresh
+    bool refresh = false;      // a setpoint is due: command() it, for program time `setpoint_time`
+    double setpoint_time = 0;  // believed program time in the middle of the interval the setpoint holds
+    bool scan = false;         // a profile is due: scan()
+  };
+
+  long steps() const { return steps_; }  // steps 0 .. steps()
+  // Moves to step k (in order from 0).
+  Step advance(long k);
+  // The offset commanded at the current step, in force from its true program time on.
+  void command(double offset);
+  double applied() const { return applied_; }
+  // The profile the sheet reads at the current step: heights where the sheet truly is, placed where
+  // the synchronizer believes it is.
+  std::vector<MeasuredPoint> scan();
+
+  const std::vector<Pass>& passes() const { return passes_; }
+  CalibrationBias calibration() const;
+  const TruePart& truth() const { return truth_; }
+
+ private:
+  const reduce::LightModel& model_;
+  const TruePart& truth_;
+  ClosedLoopSettings settings_;
+  std::vector<Pass> passes_;
+  std::vector<int> sync_;
+  std::unique_ptr<DeadReckoning> reckoning_;
+  std::unique_ptr<MachinedFloor> floor_;
+  std::mt19937 rng_;
+  double step_ = 0;
+  long scan_every_ = 1, refresh_every_ = 1, steps_ = 0;
+  std::size_t next_edge_ = 0;
+  long profiles_ = 0;
+  Step current_;
+  double applied_ = 0;
+  bool calibrating_ = false;
+  double sum_be_ = 0, sum_ee_ = 0, sum_bb_ = 0;
+  long long calibration_points_ = 0;
 };
 
 class ClosedLoop {

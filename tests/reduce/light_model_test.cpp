@@ -1,5 +1,8 @@
 // The light model file: what is written is what is read, and a wrong file is named in the error.
+#include "reduce/database_reduction.hpp"
 #include "reduce/light_model.hpp"
+#include "support/file_format.hpp"
+#include "support/version.hpp"
 #include "support/hdf5_writer.hpp"
 #include "support/input_error.hpp"
 #include "tests/reduce/synthetic_model.hpp"
@@ -7,6 +10,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <functional>
+#include <string>
 
 using namespace drom;
 
@@ -69,4 +74,56 @@ TEST(LightModel, ReadingAnotherFileNamesItAndWhatIsWrong) {
   }
   std::filesystem::remove(file);
   EXPECT_THROW(reduce::LightModel::read(file), InputError);  // missing file
+}
+
+namespace {
+
+std::string error_reading(const std::function<void()>& read) {
+  try {
+    read();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+}  // namespace
+
+TEST(LightModel, AnotherFormatVersionOrATruncatedFileIsRefusedSayingWhy) {
+  const auto dir = std::filesystem::temp_directory_path() / "drom_format_versions";
+  std::filesystem::create_directories(dir);
+  const reduce::LightModel m = test::synthetic_model();
+  m.write(dir / "model.h5");
+  // A future version: what made it, what this drom reads, and what to do.
+  {
+    Hdf5Writer h5(dir / "future.h5");
+    write_file_format(h5, {kLightModel.name, kLightModel.version + 1});
+    h5.commit();
+  }
+  const std::string future = error_reading([&] { reduce::LightModel::read(dir / "future.h5"); });
+  EXPECT_NE(future.find((dir / "future.h5").string()), std::string::npos) << future;
+  EXPECT_NE(future.find("format version 3, made by drom " + std::string(kVersion)), std::string::npos) << future;
+  EXPECT_NE(future.find("reads drom light model format version 2: update drom"), std::string::npos) << future;
+  // A file from before format versions (drom 0.1 wrote "drom light model 1" and nothing else).
+  {
+    Hdf5Writer h5(dir / "old.h5");
+    h5.attribute("format", std::string("drom light model 1"));
+    h5.commit();
+  }
+  EXPECT_NE(error_reading([&] { reduce::LightModel::read(dir / "old.h5"); }).find("before format versions"), std::string::npos);
+  // Truncated: the file is named and nothing is read from it.
+  const auto size = std::filesystem::file_size(dir / "model.h5");
+  std::filesystem::copy_file(dir / "model.h5", dir / "truncated.h5", std::filesystem::copy_options::overwrite_existing);
+  std::filesystem::resize_file(dir / "truncated.h5", size / 3);
+  EXPECT_NE(error_reading([&] { reduce::LightModel::read(dir / "truncated.h5"); }).find((dir / "truncated.h5").string()), std::string::npos);
+  // A snapshot database of another version goes the same way through the reduce stage.
+  {
+    Hdf5Writer h5(dir / "database.h5");
+    write_file_format(h5, {kSnapshotDatabase.name, 1});
+    h5.commit();
+  }
+  const std::string old_db = error_reading([&] { reduce::reduce_database(dir / "database.h5", {}); });
+  EXPECT_NE(old_db.find("format version 1"), std::string::npos) << old_db;
+  EXPECT_NE(old_db.find("write it again with this drom"), std::string::npos) << old_db;
+  std::filesystem::remove_all(dir);
 }
