@@ -4,6 +4,7 @@
 // release the GIL; the offline job's progress callback takes it back to run.
 #include "case/case.hpp"
 #include "loop/closed_loop_run.hpp"
+#include "loop/closed_loop_study.hpp"
 #include "loop/closed_loop_setup.hpp"
 #include "offline/offline_job.hpp"
 #include "online/closed_loop.hpp"
@@ -257,6 +258,20 @@ PYBIND11_MODULE(drom, m) {
         return to_python(summary);
       },
       py::arg("case"), py::arg("out"), py::arg("quiet") = true, py::arg("threads") = 0, "drom run: returns its summary");
+
+  m.def(
+      "run_study",
+      [](const cases::Case& base, const std::string& parameter, const std::vector<double>& values, const std::filesystem::path& out, bool quiet, int threads) {
+        nlohmann::json summary;
+        {
+          py::gil_scoped_release free;
+          summary = loop::run_study(base, parameter, values, {out, quiet, threads});
+        }
+        return to_python(summary);
+      },
+      py::arg("case"), py::arg("parameter"), py::arg("values"), py::arg("out"), py::arg("quiet") = true, py::arg("threads") = 0,
+      "drom study: one loop parameter swept (noise, angle, refresh, calibration, desync, amplitude, seed); returns its summary");
+  m.def("study_parameters", &loop::study_parameters);
 
   py::class_<online::LoopMachine::Step>(m, "LoopStep")
       .def_readonly("index", &online::LoopMachine::Step::index)
