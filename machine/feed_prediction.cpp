@@ -69,31 +69,84 @@ Limits block_limits(const MachineBlock& b, const BlockPath& p, BlockPrediction& 
   return l;
 }
 
-// The speed allowed through the junction between blocks a and b (machine_definition's junction model).
-double junction_speed(const MachineBlock& a, const BlockPath& pa, const MachineBlock& b, const BlockPath& pb, const Machine& m) {
-  if (b.stop_before || a.type == MoveType::Dwell || b.type == MoveType::Dwell) return 0;
-  if ((a.type == MoveType::Rapid) != (b.type == MoveType::Rapid)) return 0;
-  if (m.junction == JunctionMode::ExactStop) return 0;
-  if (pa.rotary_only != pb.rotary_only) return 0;  // the path coordinate changes its unit
-  double half = 0.5 * std::min(pa.length, pb.length), v = kInf, v_jump = kInf;
-  bool corner = false;
+// The corners between blocks, as the control rounds them (machine_definition.hpp's JunctionMode).
+// At corner k, axis j's rate dq_j/ds jumps by Δu_j. The control replaces the corner by a blend of
+// half-length δ, the longest that keeps every axis within its tolerance ε_j and within half of each
+// neighbouring block. Within it, the axis velocity changes by v Δu_j with a triangular acceleration
+// (the least jerk for that change): its deviation from the corner is δ Δu_j / 6, so δ = 6 ε_j / Δu_j,
+// and its peak acceleration and jerk are v² Δu_j / δ and v³ Δu_j / δ².
+//   Blend: each corner on its own: v ≤ √(A_j δ / Δu_j) and ∛(J_j δ² / Δu_j).
+//   Smooth: consecutive blends join into one curve of joint curvature κ_j = Δu_j / (2δ): the
+//   acceleration v² κ_j is continuous across corners, and the jerk comes from the change of κ_j to the
+//   neighbouring corner's over the distance between their middles: v ≤ √(A_j / κ_j), ∛(J_j / ρ_j).
+// A velocity jump the axis absorbs within one interpolation cycle (A_j T_ipo) always passes.
+struct Corner {
+  bool stop = false;   // the tool stops here
+  double half = 0;     // δ: the blend's half-length (all axes together)
+  Joints axis_half = Joints::Zero();  // each axis's own δ (smooth mode: each axis's curve is smoothed on its own)
+  std::array<bool, kMaxJoints> tolerance_bound{};  // the axis's δ is set by its tolerance, not by the blocks' lengths
+  double before = 0, after = 0;  // the lengths of the blocks on either side
+  Joints jump = Joints::Zero();  // Δu per joint
+};
+
+Corner corner_between(const MachineBlock& a, const BlockPath& pa, const MachineBlock& b, const BlockPath& pb, const Machine& m) {
+  Corner c;
+  c.stop = b.stop_before || a.type == MoveType::Dwell || b.type == MoveType::Dwell || (a.type == MoveType::Rapid) != (b.type == MoveType::Rapid) ||
+           m.junction == JunctionMode::ExactStop || pa.rotary_only != pb.rotary_only || !(pa.length > 0) || !(pb.length > 0);
+  c.before = pa.length;
+  c.after = pb.length;
+  if (c.stop) return c;
+  c.half = 0.5 * std::min(pa.length, pb.length);
   for (int k = 0; k < m.joint_count(); ++k) {
-    const double du = std::abs(pb.rate_start[k] - pa.rate_end[k]);
-    if (!(du > 1e-12)) continue;
-    corner = true;
+    c.jump[k] = std::abs(pb.rate_start[k] - pa.rate_end[k]);
+    if (!(c.jump[k] > 1e-12)) {
+      c.jump[k] = 0;
+      continue;
+    }
     const AxisLimits& ax = m.axes[k];
     const double tol = ax.rotary ? m.junction_tolerance_rotary : (b.blend_tolerance >= 0 ? b.blend_tolerance : m.junction_tolerance);
-    half = std::min(half, 16 * tol / (3 * du));
+    const double by_tolerance = 6 * tol / c.jump[k], by_blocks = 0.5 * std::min(pa.length, pb.length);
+    c.axis_half[k] = std::min(by_blocks, by_tolerance);
+    c.tolerance_bound[k] = by_tolerance < by_blocks;
+    c.half = std::min(c.half, c.axis_half[k]);
+  }
+  return c;
+}
+
+// The speed limit at corner k, given its neighbours (for the smooth mode).
+double corner_speed(const std::vector<Corner>& corners, std::size_t k, const Machine& m) {
+  const Corner& c = corners[k];
+  if (c.stop) return 0;
+  double v = kInf, v_jump = kInf;
+  bool any = false;
+  for (int j = 0; j < m.joint_count(); ++j) {
+    const double du = c.jump[j];
+    if (!(du > 0)) continue;
+    any = true;
+    const AxisLimits& ax = m.axes[j];
     v_jump = std::min(v_jump, ax.acceleration * m.interpolation_cycle / du);
+    if (!(c.half > 0)) {
+      v = 0;
+      continue;
+    }
+    if (m.junction == JunctionMode::Smooth) {
+      // The curvature's rate of change towards each neighbour: over the block between the two corners
+      // when their blends meet, else from zero within this corner's blend.
+      const double half = c.axis_half[j], kappa = du / (2 * half);
+      double rho = 0;
+      for (int side : {-1, 1}) {
+        const Corner& o = corners[side < 0 ? k - 1 : k + 1];
+        const double between = side < 0 ? c.before : c.after;
+        const bool joined = !o.stop && !c.tolerance_bound[j] && !o.tolerance_bound[j];
+        const double kappa_o = o.axis_half[j] > 0 ? o.jump[j] / (2 * o.axis_half[j]) : 0.0;
+        rho = std::max(rho, joined ? std::abs(kappa - kappa_o) / between : kappa / half);
+      }
+      v = std::min({v, std::sqrt(ax.acceleration / kappa), std::cbrt(ax.jerk / rho)});
+    } else {
+      v = std::min({v, std::sqrt(ax.acceleration * c.half / du), std::cbrt(ax.jerk * c.half * c.half / du)});
+    }
   }
-  if (!corner) return kInf;
-  for (int k = 0; k < m.joint_count(); ++k) {
-    const double du = std::abs(pb.rate_start[k] - pa.rate_end[k]);
-    if (!(du > 1e-12)) continue;
-    const AxisLimits& ax = m.axes[k];
-    v = std::min({v, std::sqrt(4 * ax.acceleration * half / (3 * du)), std::cbrt(2 * ax.jerk * half * half / (3 * du))});
-  }
-  return std::max(v, v_jump);
+  return any ? std::max(v, v_jump) : kInf;
 }
 
 }  // namespace
@@ -128,10 +181,11 @@ FeedPrediction predict_feed(const MachineProgram& program, const Kinematics& kin
   std::vector<double> node(n + 1, 0.0);
   std::vector<char> anchor(n + 1, 0);
   anchor[0] = anchor[n] = 1;
+  std::vector<Corner> corners(n + 1);
+  corners[0].stop = corners[n].stop = true;
+  for (std::size_t k = 1; k < n; ++k) corners[k] = corner_between(program.blocks[k - 1], out.paths_[k - 1], program.blocks[k], out.paths_[k], m);
   for (std::size_t k = 1; k < n; ++k) {
-    const bool moving = out.blocks[k - 1].length > 0 && out.blocks[k].length > 0;
-    node[k] = moving ? std::min({junction_speed(program.blocks[k - 1], out.paths_[k - 1], program.blocks[k], out.paths_[k], m), limits[k - 1].cap, limits[k].cap})
-                     : 0.0;
+    node[k] = std::min({corner_speed(corners, k, m), limits[k - 1].cap, limits[k].cap});
     if (node[k] < std::min(limits[k - 1].cap, limits[k].cap) * (1 - 1e-12)) anchor[k] = 1;
   }
   for (std::size_t k = 0; k < n; ++k) out.blocks[k].end_speed_limit = node[k + 1];

@@ -7,11 +7,13 @@
 //    set them, limit the path's speed, acceleration and jerk. The speed is further capped by the
 //    programmed feed, by one block per interpolation cycle (ℓ / T_ipo), and on arcs by the axes'
 //    centripetal acceleration and jerk (half of each is reserved for it).
-// 2. At each junction, the corner in joint space is blended within the per-axis tolerance (G642,
-//    G64 P): over a half-length δ = 16 ε / (3 Δu_k) the axis velocity changes by v Δu_k along a
-//    smoothstep, which bounds v by √(4 A_k δ / (3 Δu_k)) and ∛(2 J_k δ² / (3 Δu_k)); a velocity jump
-//    the axis absorbs within one interpolation cycle (A_k T_ipo) always passes. Exact stops, tool
-//    changes, dwells and rapid/feed changes stop the tool.
+// 2. At each junction the control rounds the corner in joint space within each axis's tolerance
+//    (G642, G64 P): a blend of half-length δ = 6 ε / Δu_k (the jump of dq_k/ds) in which the axis
+//    velocity changes with a triangular acceleration, the least jerk for the change. Blend mode
+//    (corners on their own) bounds v by √(A_k δ / Δu_k) and ∛(J_k δ² / Δu_k); smooth mode (a
+//    compressor joining consecutive corners) by the joint curvature κ = Δu_k / 2δ and its rate of
+//    change: √(A_k / κ), ∛(J_k / κ'). A velocity jump the axis absorbs within one interpolation cycle
+//    (A_k T_ipo) always passes. Exact stops, tool changes, dwells and rapid/feed changes stop the tool.
 // 3. The path coordinate s (the tool tip's travel in the part frame, or the rotary travel in degrees
 //    on a block that only turns) is planned with jerk-limited 7-phase S-curves between anchors where
 //    the acceleration is zero: the start, the end, the junctions that limit the speed, and the blocks

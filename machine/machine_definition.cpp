@@ -122,7 +122,8 @@ Machine parse_machine(const std::string& text, const std::string& origin, const 
   }
 
   m.interpolation_cycle = r.real("control.interpolation_cycle", Range::open_closed(0, 0.1), 0.002);
-  m.junction = r.choice("control.junction", {"blend", "exact_stop"}, std::string("blend")) == "blend" ? JunctionMode::Blend : JunctionMode::ExactStop;
+  const std::string junction = r.choice("control.junction", {"blend", "smooth", "exact_stop"}, std::string("blend"));
+  m.junction = junction == "blend" ? JunctionMode::Blend : junction == "smooth" ? JunctionMode::Smooth : JunctionMode::ExactStop;
   m.junction_tolerance = r.real("control.junction_tolerance", Range::non_negative(), 0.01);
   m.junction_tolerance_rotary = r.real("control.junction_tolerance_rotary", Range::non_negative(), 0.01) * kDegree;
   m.singularity_cone = r.real("control.singularity_cone", Range::open_closed(0, 45), 1.0) * kDegree;

@@ -41,7 +41,10 @@ struct RotaryJoint {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();       // a point on the axis: program frame (table), or relative to the pivot (head)
 };
 
-enum class JunctionMode { Blend, ExactStop };
+// Blend: each corner rounded on its own within the tolerance (G642, G64 P). Smooth: the control
+// joins consecutive corners into one curvature-continuous curve within the tolerance (a compressor:
+// 840D COMPCURV, LinuxCNC's naive-CAM G64 Q). ExactStop: the tool stops at every block end (G61.1).
+enum class JunctionMode { Blend, Smooth, ExactStop };
 
 struct Machine {
   std::string name, description, origin;  // origin: the file it came from
