@@ -1,6 +1,7 @@
 #include "machine/gcode_reader.hpp"
 
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -22,6 +23,28 @@ struct Modal {
   bool exact_stop_every_block = false;  // G61.1
 };
 
+// A G-code number: [+-] digits [. digits], or [+-] . digits (no exponent, no hexadecimal: "G0X2"
+// must not read as G 0x2). Returns the characters used, 0 when there is no number.
+std::size_t read_number(const std::string& s, std::size_t i, double& value) {
+  const std::size_t start = i;
+  if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+  const std::size_t digits_from = i;
+  while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i]))) ++i;
+  std::size_t digits = i - digits_from;
+  if (i < s.size() && s[i] == '.') {
+    ++i;
+    const std::size_t f = i;
+    while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i]))) ++i;
+    digits += i - f;
+  }
+  if (digits == 0) return 0;
+  std::string text = s.substr(start, i - start);
+  if (text[0] == '+') text.erase(0, 1);
+  const auto r = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (r.ec != std::errc()) return 0;
+  return i - start;
+}
+
 std::string g_name(int g10) {
   char buf[16];
   std::snprintf(buf, sizeof buf, "G%g", g10 / 10.0);
@@ -33,10 +56,8 @@ std::string g_name(int g10) {
 void settle_program_start(NcProgram& program) {
   for (NcMove& m : program.moves) {
     if (m.type == MoveType::Dwell) continue;
-    if (m.type != MoveType::Rapid)
-      throw InputError(program.origin + ":" + std::to_string(m.line) +
-                       ": the first motion is a cutting move from an unknown position: start the program with a rapid (G0) to a known position");
-    m.start = m.end;
+    if (m.type != MoveType::Rapid) program.start_assumed = true;
+    else m.start = m.end;
     break;
   }
 }
@@ -81,18 +102,13 @@ NcProgram parse_plain_gcode(const std::string& text, const std::string& origin) 
       }
       if (c == '/') outside("block delete '/'");
       if (c == '#' || c == '[' || c == 'O') outside(c == 'O' ? std::string("an O-word") : c == '#' ? std::string("a #parameter") : std::string("an [expression]"));
-      if (!std::isalpha(static_cast<unsigned char>(c))) throw InputError(where + "expected a word letter, got '" + std::string(1, line[i]) + "'");
+      if (!std::isalpha(static_cast<unsigned char>(c))) outside("the character '" + std::string(1, line[i]) + "'");
       ++i;
       while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
       if (i < line.size() && (line[i] == '#' || line[i] == '[')) outside("a #parameter or [expression] as a word's value");
-      std::size_t used = 0;
       double value = 0;
-      try {
-        value = std::stod(line.substr(i), &used);
-      } catch (const std::exception&) {
-        throw InputError(where + "word '" + std::string(1, c) + "' has no number");
-      }
-      if (!std::isfinite(value)) throw InputError(where + "word '" + std::string(1, c) + "' has no finite number");
+      const std::size_t used = read_number(line, i, value);
+      if (used == 0) throw InputError(where + "word '" + std::string(1, c) + "' has no number");
       i += used;
       switch (c) {
         case 'G': g_codes.push_back(static_cast<int>(std::lround(value * 10))); break;
@@ -105,7 +121,7 @@ NcProgram parse_plain_gcode(const std::string& text, const std::string& origin) 
           if (words.count(c)) throw InputError(where + "word " + std::string(1, c) + " appears twice");
           words[c] = value;
           break;
-        default: throw InputError(where + "unknown word '" + std::string(1, c) + "'");
+        default: outside("the word '" + std::string(1, c) + "'");
       }
     }
     bool dwell = false, g43 = false, g64 = false;

@@ -24,8 +24,9 @@ class OutsidePlainSubset : public InputError {
 
 NcProgram parse_plain_gcode(const std::string& text, const std::string& origin);
 
-// The convention both readers share: a program starts where its first move ends, which must be a
-// rapid (the machine's position before it is unknown). Throws InputError otherwise.
+// The convention both readers share: a program starts where its first motion ends when that is a
+// rapid (the machine's position before it is unknown); a first motion that cuts starts at the program
+// origin, as LinuxCNC's interpreter assumes, and the program says so (start_assumed).
 void settle_program_start(NcProgram& program);
 
 }  // namespace drom::machine

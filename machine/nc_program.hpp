@@ -44,6 +44,9 @@ struct NcProgram {
   std::string origin;  // the file
   std::vector<NcMove> moves;
   std::string reader;  // "drom" or "rs274"
+  // The first motion cuts from an unknown position: it is taken to start at the program origin, as
+  // LinuxCNC's interpreter does, and its time from there is not the machine's (reported, not refused).
+  bool start_assumed = false;
   bool uses_rotary(int axis) const;  // axis 3, 4, 5: A, B, C
 };
 

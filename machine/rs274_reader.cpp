@@ -201,6 +201,7 @@ NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& opti
   int plane = 17;
   double feed = 0, spindle_speed = 0;
   bool per_revolution = false, stop_pending = false;
+  double synchronized = 0;  // units per spindle revolution while motion follows the spindle (G33, G33.1), else 0
   PathControl control = PathControl::Blend;
   double tolerance = -1;
   bool exact_stop = false;
@@ -208,7 +209,9 @@ NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& opti
   int last_line = 0;
   std::string line;
   auto fail = [&](int at, const std::string& message) -> void {
-    throw InputError(origin + ":" + (at > 0 ? std::to_string(at) : std::string("?")) + ": " + message);
+    if (at > 0) throw InputError(origin + ":" + std::to_string(at) + ": " + message);
+    if (last_line > 0) throw InputError(origin + ":" + std::to_string(last_line) + ": (in a subroutine file it calls) " + message);
+    throw InputError(origin + ": " + message);
   };
   auto machine_axes = [&](const std::vector<double>& v, std::size_t from) {
     std::array<double, 9> p = position;
@@ -231,6 +234,7 @@ NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& opti
       // The interpreter's feed is per minute of its reference: program length units, or degrees.
       double f = feed * (linear ? unit : 1.0);
       if (per_revolution) f *= spindle_speed;
+      if (synchronized > 0) f = synchronized * unit * spindle_speed;
       if (!(f > 0)) fail(at, "a cutting move with a zero feed rate");
       m.feed = f;
     }
@@ -312,10 +316,24 @@ NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& opti
       stop_pending = true;
     } else if (f == "STRAIGHT_PROBE") {
       fail(at, "not a milling program: it probes (G38), which drom does not model");
+    } else if (f == "START_SPEED_FEED_SYNC" || f == "START_SPEED_FEED_SYNCH") {
+      const auto v = numbers(c.args);
+      synchronized = v.empty() ? 0 : v[0];
+      if (!(spindle_speed > 0)) fail(at, "spindle-synchronized motion (G33, G33.1) with the spindle stopped");
+    } else if (f == "STOP_SPEED_FEED_SYNCH" || f == "STOP_SPEED_FEED_SYNC") {
+      synchronized = 0;
     } else if (f == "RIGID_TAP") {
-      fail(at, "rigid tapping (G33.1) is not modelled");
-    } else if (f == "START_SPEED_FEED_SYNCH") {
-      fail(at, "not a milling program: spindle-synchronized motion (G33, G76 threading) is lathe work, which drom does not model");
+      // G33.1: down to the hole's bottom at the pitch times the spindle speed, the spindle reverses,
+      // and the tap comes back out along the same line.
+      const auto v = numbers(c.args);
+      if (v.size() < 3) fail(at, "rs274 printed RIGID_TAP with " + std::to_string(v.size()) + " values");
+      std::array<double, 9> bottom = position;
+      for (int k = 0; k < 3; ++k) bottom[k] = v[k] * unit + g5x[k] + g92[k];
+      const std::array<double, 9> top = position;
+      stop_pending = true;
+      program.moves.push_back(add_move(MoveType::Linear, bottom, at));
+      stop_pending = true;
+      program.moves.push_back(add_move(MoveType::Linear, top, at));
     }
   }
   if (status != 0) {

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <random>
 
@@ -191,7 +192,11 @@ TEST(FeedPrediction, RandomProgramsRespectEveryLimit) {
 TEST(FeedPrediction, ShortBlocksAreCappedByTheInterpolationCycle) {
   Machine m = load_machine("vmc_3axis");
   std::string program = "G21 G90 G64\nG0 X0 Y0 Z0\nG1 F6000\n";
-  for (int i = 1; i <= 2000; ++i) program += "X" + std::to_string(0.02 * i) + "\n";  // collinear 0.02 mm blocks
+  char block[32];
+  for (int i = 1; i <= 2000; ++i) {  // collinear 0.02 mm blocks
+    std::snprintf(block, sizeof block, "X%.2f\n", 0.02 * i);
+    program += block;
+  }
   const FeedPrediction p = predict(program, m);
   const double cap = 0.02 / m.interpolation_cycle;  // 20 mm/s, below the programmed 100 mm/s
   for (std::size_t i = 0; i < p.blocks.size(); ++i)
