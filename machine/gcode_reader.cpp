@@ -21,6 +21,7 @@ struct Modal {
   PathControl control = PathControl::Blend;
   double blend_tolerance = -1;
   bool exact_stop_every_block = false;  // G61.1
+  int tool_length_offset = 0;
 };
 
 // A G-code number: [+-] digits [. digits], or [+-] . digits (no exponent, no hexadecimal: "G0X2"
@@ -135,7 +136,7 @@ NcProgram parse_plain_gcode(const std::string& text, const std::string& origin) 
         case 210: modal.unit = 1.0; break;
         case 400: case 540: case 800: case 911: break;  // no cutter compensation, G54, no canned cycle, incremental arc centres
         case 430: g43 = true; break;
-        case 490: break;
+        case 490: modal.tool_length_offset = 0; break;
         case 610: modal.control = PathControl::Blend, modal.blend_tolerance = 0, modal.exact_stop_every_block = false; break;
         case 611: modal.control = PathControl::ExactStop, modal.exact_stop_every_block = true; break;
         case 640: g64 = true; break;
@@ -148,6 +149,7 @@ NcProgram parse_plain_gcode(const std::string& text, const std::string& origin) 
     }
     if (motion_words > 1) throw InputError(where + "two motion words (G0/G1/G2/G3) in one block");
     if (words.count('H') && !g43) throw InputError(where + "H word without G43");
+    if (g43) modal.tool_length_offset = words.count('H') ? static_cast<int>(std::lround(words['H'])) : 0;
     if (g64) {
       modal.control = PathControl::Blend;
       modal.exact_stop_every_block = false;
@@ -201,6 +203,7 @@ NcProgram parse_plain_gcode(const std::string& text, const std::string& origin) 
     move.control = modal.control;
     move.blend_tolerance = modal.blend_tolerance;
     move.stop_before = stop_pending;
+    move.tool_length_offset = modal.tool_length_offset;
     stop_pending = modal.exact_stop_every_block;
     if (modal.motion == 0) {
       move.type = MoveType::Rapid;

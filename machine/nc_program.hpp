@@ -32,6 +32,7 @@ struct NcMove {
   PathControl control = PathControl::Blend;
   double blend_tolerance = -1;  // mm: G64 P; negative: the machine's own
   bool stop_before = false;   // a tool change, program stop or mode change the NC waits at before this move
+  int tool_length_offset = 0; // the active G43 H number, 0 without (kept as data: programs are written for the tool tip)
   int line = 0;               // source line (0: unknown, e.g. a move from a subroutine file)
 
   // The interpreter's feed reference: the XYZ length when X, Y or Z move, else the ABC travel (deg).

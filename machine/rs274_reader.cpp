@@ -184,7 +184,9 @@ NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& opti
     std::ofstream tools(table);
     for (int t = 1; t < 1000; ++t) {
       const auto it = options.tool_diameters.find(t);
-      tools << 'T' << t << " P" << t << " Z0 D" << (it == options.tool_diameters.end() ? 0.0 : it->second / 25.4) << " ;\n";  // rs274 reads inches
+      // rs274 reads the table in inches. Each tool's length is its number (in inches), so that the
+      // offset rs274 reports after G43 H names the H used; lengths do not move the canonical positions.
+      tools << 'T' << t << " P" << t << " Z" << t << " D" << (it == options.tool_diameters.end() ? 0.0 : it->second / 25.4) << " ;\n";
     }
   }
   const int status = run_with_timeout({exe, "-i", ini.string(), "-t", table.string(), "-g", copy.string()}, output, options.timeout);
@@ -202,6 +204,7 @@ NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& opti
   double feed = 0, spindle_speed = 0;
   bool per_revolution = false, stop_pending = false;
   double synchronized = 0;  // units per spindle revolution while motion follows the spindle (G33, G33.1), else 0
+  int tool_length_offset = 0;
   PathControl control = PathControl::Blend;
   double tolerance = -1;
   bool exact_stop = false;
@@ -228,6 +231,7 @@ NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& opti
     m.control = exact_stop ? PathControl::ExactStop : control;
     m.blend_tolerance = tolerance;
     m.stop_before = stop_pending;
+    m.tool_length_offset = tool_length_offset;
     stop_pending = exact_stop;
     if (type != MoveType::Rapid) {
       const bool linear = (m.end.head<3>() - m.start.head<3>()).norm() > 1e-12 || type == MoveType::Arc;
@@ -312,6 +316,9 @@ NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& opti
         control = PathControl::Blend;
         tolerance = !v.empty() && v[0] > 0 ? v[0] * unit : -1;  // G64 without P: the machine's own
       }
+    } else if (f == "USE_TOOL_LENGTH_OFFSET") {
+      const auto v = numbers(c.args);
+      tool_length_offset = v.size() >= 3 ? static_cast<int>(std::lround(v[2] * unit / 25.4)) : 0;
     } else if (f == "CHANGE_TOOL" || f == "PROGRAM_STOP" || f == "OPTIONAL_PROGRAM_STOP" || f == "PROGRAM_END" || f == "PALLET_SHUTTLE") {
       stop_pending = true;
     } else if (f == "STRAIGHT_PROBE") {

@@ -293,7 +293,7 @@ PYBIND11_MODULE(drom, m) {
       .def(py::init([](const std::shared_ptr<loop::ClosedLoopInputs>& in, const cases::Case& c) {
              auto made = std::make_unique<Machine>();
              made->truth = in->play();
-             made->machine = std::make_unique<online::LoopMachine>(in->model, made->truth.part, loop::loop_settings(c));
+             made->machine = std::make_unique<online::LoopMachine>(in->model, made->truth.part, loop::loop_settings(c, in->model));
              return made;
            }),
            py::arg("inputs"), py::arg("case"), py::keep_alive<1, 2>())
