@@ -10,17 +10,21 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstdio>
 
 using namespace drom::machine;
 
 namespace {
+
+volatile double sink = 0;
 
 ClProgram saddle_zigzag(std::size_t points) {
   ClProgram cl;
   const double c = 100, tilt = 3 * M_PI / 180, step = 0.25, width = 160;
   const int per_pass = static_cast<int>(width / step) + 1;
   for (std::size_t k = 0; k < points; ++k) {
-    const int pass = static_cast<int>(k / per_pass), i = static_cast<int>(k % per_pass);
+    // The zigzag covers the square in 161 passes, then starts over (a million points: six times).
+    const int pass = static_cast<int>(k / per_pass) % 161, i = static_cast<int>(k % per_pass);
     const double y = -80 + 1.0 * pass, x = pass % 2 ? 80 - step * i : -80 + step * i;
     const Eigen::Vector3d n = Eigen::Vector3d(-x / c, y / c, 1).normalized();
     const Eigen::Vector3d f = Eigen::Vector3d(1, 0, x / c).normalized();
@@ -37,16 +41,18 @@ ClProgram saddle_zigzag(std::size_t points) {
 void TimePrediction(benchmark::State& state) {
   const Kinematics kin(load_machine("ucp710_like"));
   const ClOnMachine on = cl_to_machine_program(saddle_zigzag(static_cast<std::size_t>(state.range(0)) + 1), kin);
-  FeedPrediction p;
+  double cycle = 0, programmed = 0, anchors = 0, passes = 0;
   for (auto _ : state) {
-    p = predict_feed(on.program, kin);
-    benchmark::DoNotOptimize(p.cycle_time);
+    const FeedPrediction p = predict_feed(on.program, kin);
+    cycle = p.cycle_time, programmed = p.programmed_time, anchors = p.anchors, passes = p.iterations;
+    benchmark::ClobberMemory();
   }
   state.counters["blocks"] = static_cast<double>(on.program.blocks.size());
-  state.counters["cycle_time_s"] = p.cycle_time;
-  state.counters["programmed_time_s"] = p.programmed_time;
-  state.counters["anchors"] = p.anchors;
-  state.counters["planner_passes"] = p.iterations;
+  state.counters["cycle_time_s"] = cycle;
+  state.counters["programmed_time_s"] = programmed;
+  state.counters["anchors"] = anchors;
+  state.counters["planner_passes"] = passes;
+  state.counters["violations"] = static_cast<double>(on.joints.violations.size());
 }
 BENCHMARK(TimePrediction)->Arg(100000)->Unit(benchmark::kMillisecond)->MinTime(2);
 
@@ -55,11 +61,14 @@ void InverseKinematics(benchmark::State& state) {
   const ClProgram cl = saddle_zigzag(static_cast<std::size_t>(state.range(0)));
   std::vector<ClPose> poses;
   for (const auto& p : cl.points) poses.push_back(p.pose);
+  std::size_t violations = 0;
   for (auto _ : state) {
     const JointPath path = inverse_path(kin, poses);
+    violations = path.violations.size();
     benchmark::DoNotOptimize(path.joints.back());
   }
   state.counters["poses"] = static_cast<double>(poses.size());
+  state.counters["violations"] = static_cast<double>(violations);
 }
 BENCHMARK(InverseKinematics)->Arg(1000000)->Unit(benchmark::kMillisecond)->MinTime(2);
 
@@ -69,7 +78,7 @@ void InverseKinematicsOneThread(benchmark::State& state) {
   for (auto _ : state) {
     double sum = 0;
     for (const auto& p : cl.points) sum += kin.inverse(p.pose).joints[0][4];
-    benchmark::DoNotOptimize(sum);
+    sink = sum;  // (DoNotOptimize on a double misbehaves with GCC 12 and Debian's benchmark 1.7: see shared/deps.md)
   }
 }
 BENCHMARK(InverseKinematicsOneThread)->Arg(1000000)->Unit(benchmark::kMillisecond)->MinTime(2);

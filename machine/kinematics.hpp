@@ -28,6 +28,14 @@ struct ClPose {
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();      // part frame, unit, tip -> spindle
 };
 
+// The subproblem's two solutions for one pose, before any trigonometry: c = R(k2, θ2) v, one per
+// branch. Along a path the branch whose c moves least is the continuous one.
+struct BranchSplit {
+  int count = 0;  // 0: out of reach; 1: the branches meet; 2
+  bool singular = false;
+  std::array<Eigen::Vector3d, 2> c;
+};
+
 // Both branches of one pose, rotary angles in (-π, π] before unwrapping.
 struct IkBranches {
   int count = 0;                 // 0 (orientation unreachable), 1 (singular: the branches coincide) or 2
@@ -43,6 +51,9 @@ class Kinematics {
   ClPose forward(const Joints& q) const;
   // `free_angle`: the value the free angle takes at an exact singularity (the previous pose's).
   IkBranches inverse(const ClPose& pose, double free_angle = 0) const;
+  // The same in two steps, so a path pays the trigonometry of the branch it takes only.
+  BranchSplit split(const ClPose& pose) const;
+  Joints solve_branch(const ClPose& pose, const BranchSplit& split, int branch) const;  // not at a singularity
   // The angle between the tool axis (part frame) and the nearest singular direction (π/2 for a 3-axis machine).
   double singularity_distance(const Eigen::Vector3d& axis) const;
   // The value checked against joint j's stroke: the joint, or for the tip-controlled chains (3-axis,
@@ -50,7 +61,13 @@ class Kinematics {
   double stroke_value(int j, const Joints& q) const;
   bool tip_controlled() const { return tip_controlled_; }
 
+  // A rotary joint's turn: its angle, and the cosine and sine it was read from.
+  struct Turn {
+    double angle = 0, c = 1, s = 0;
+  };
+
  private:
+  Joints joints_from_turns(const ClPose& pose, const Turn& first, const Turn& second) const;
   Machine machine_;
   bool tip_controlled_ = true;
   // The subproblem's layout for this chain: which of u (part-frame tool axis) and e_z plays v and w.
