@@ -83,10 +83,13 @@ struct Machine {
 
 }  // namespace
 
+void bind_machine(py::module_& m);  // machine_bindings.cpp
+
 PYBIND11_MODULE(drom, m) {
   m.doc() = "drom: distortion-aware machining of thin parts (docs/python.md)";
   m.attr("__version__") = kVersion;
   py::register_exception<InputError>(m, "InputError", PyExc_ValueError);
+  bind_machine(m);
 
   // ---- cases -------------------------------------------------------------------------------
   py::class_<cases::Case>(m, "Case", "A case file read and validated (case/case.hpp); every key as in docs/case-files.md")
