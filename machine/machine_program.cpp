@@ -7,6 +7,38 @@
 
 namespace drom::machine {
 
+namespace {
+
+struct ArcShape {
+  double a0 = 0, sweep = 0, r0 = 0, r1 = 0, rise = 0;  // start angle, sweep, radii, travel along the normal
+  PlaneAxes p;
+};
+
+ArcShape arc_shape(const MachineBlock& b) {
+  ArcShape a;
+  a.p = plane_axes(b.plane);
+  NcMove m;
+  m.plane = b.plane;
+  m.rotation = b.rotation;
+  m.centre = b.centre;
+  m.start.head<3>() = b.start.head<3>();
+  m.end.head<3>() = b.end.head<3>();
+  a.sweep = arc_sweep(m);
+  a.a0 = std::atan2(b.start[a.p.second] - b.centre[a.p.second], b.start[a.p.first] - b.centre[a.p.first]);
+  a.r0 = std::hypot(b.start[a.p.first] - b.centre[a.p.first], b.start[a.p.second] - b.centre[a.p.second]);
+  a.r1 = std::hypot(b.end[a.p.first] - b.centre[a.p.first], b.end[a.p.second] - b.centre[a.p.second]);
+  a.rise = b.end[a.p.normal] - b.start[a.p.normal];
+  return a;
+}
+
+// Whether the angle range between a and b (either order) holds offset + k π for some integer k.
+bool holds(double a, double b, double offset) {
+  const double lo = std::min(a, b) - offset, hi = std::max(a, b) - offset;
+  return std::floor(hi / std::numbers::pi) >= std::ceil(lo / std::numbers::pi);
+}
+
+}  // namespace
+
 MachineProgram to_machine_program(const NcProgram& program, const Machine& machine) {
   MachineProgram out;
   out.origin = program.origin;
@@ -47,58 +79,15 @@ MachineProgram to_machine_program(const NcProgram& program, const Machine& machi
 Joints block_joints_at(const MachineBlock& b, double sigma) {
   Joints q = b.start + sigma * (b.end - b.start);
   if (b.type == MoveType::Arc) {
-    NcMove m;
-    m.plane = b.plane;
-    m.rotation = b.rotation;
-    m.centre = b.centre;
-    m.start.head<3>() = b.start.head<3>();
-    m.end.head<3>() = b.end.head<3>();
-    const PlaneAxes p = plane_axes(b.plane);
-    const double r0 = std::hypot(b.start[p.first] - b.centre[p.first], b.start[p.second] - b.centre[p.second]);
-    const double r1 = std::hypot(b.end[p.first] - b.centre[p.first], b.end[p.second] - b.centre[p.second]);
-    const double r = r0 + sigma * (r1 - r0);  // the ends' radii differ by the program's rounding
-    const double a = std::atan2(b.start[p.second] - b.centre[p.second], b.start[p.first] - b.centre[p.first]) + sigma * arc_sweep(m);
-    q[p.first] = b.centre[p.first] + r * std::cos(a);
-    q[p.second] = b.centre[p.second] + r * std::sin(a);
+    const ArcShape a = arc_shape(b);
+    const double r = a.r0 + sigma * (a.r1 - a.r0);  // the ends' radii differ by the program's rounding
+    const double angle = a.a0 + sigma * a.sweep;
+    q[a.p.first] = b.centre[a.p.first] + r * std::cos(angle);
+    q[a.p.second] = b.centre[a.p.second] + r * std::sin(angle);
   }
   return q;
 }
 
-}  // namespace drom::machine
-
-namespace drom::machine {
-
-namespace {
-
-struct ArcShape {
-  double a0 = 0, sweep = 0, r0 = 0, r1 = 0, rise = 0;  // start angle, sweep, radii, travel along the normal
-  PlaneAxes p;
-};
-
-ArcShape arc_shape(const MachineBlock& b) {
-  ArcShape a;
-  a.p = plane_axes(b.plane);
-  NcMove m;
-  m.plane = b.plane;
-  m.rotation = b.rotation;
-  m.centre = b.centre;
-  m.start.head<3>() = b.start.head<3>();
-  m.end.head<3>() = b.end.head<3>();
-  a.sweep = arc_sweep(m);
-  a.a0 = std::atan2(b.start[a.p.second] - b.centre[a.p.second], b.start[a.p.first] - b.centre[a.p.first]);
-  a.r0 = std::hypot(b.start[a.p.first] - b.centre[a.p.first], b.start[a.p.second] - b.centre[a.p.second]);
-  a.r1 = std::hypot(b.end[a.p.first] - b.centre[a.p.first], b.end[a.p.second] - b.centre[a.p.second]);
-  a.rise = b.end[a.p.normal] - b.start[a.p.normal];
-  return a;
-}
-
-// Whether the angle range between a and b (either order) holds offset + k π for some integer k.
-bool holds(double a, double b, double offset) {
-  const double lo = std::min(a, b) - offset, hi = std::max(a, b) - offset;
-  return std::floor(hi / std::numbers::pi) >= std::ceil(lo / std::numbers::pi);
-}
-
-}  // namespace
 
 BlockPath::Derivatives BlockPath::at(const MachineBlock& b, double sigma) const {
   Derivatives d;

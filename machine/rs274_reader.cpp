@@ -189,7 +189,12 @@ NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& opti
       tools << 'T' << t << " P" << t << " Z" << t << " D" << (it == options.tool_diameters.end() ? 0.0 : it->second / 25.4) << " ;\n";
     }
   }
-  const int status = run_with_timeout({exe, "-i", ini.string(), "-t", table.string(), "-g", copy.string()}, output, options.timeout);
+  int status = run_with_timeout({exe, "-i", ini.string(), "-t", table.string(), "-g", copy.string()}, output, options.timeout);
+  // Killed by a signal (seen once here, a SIGBUS under heavy load): run it again once, afresh.
+  if (status > 128) {
+    std::ofstream(vars) << "";
+    status = run_with_timeout({exe, "-i", ini.string(), "-t", table.string(), "-g", copy.string()}, output, options.timeout);
+  }
   if (status == -1)
     throw InputError(origin + ": LinuxCNC's interpreter did not finish within " + std::to_string(options.timeout.count()) +
                      " s: an endless loop (O-word while/do/repeat)?");
@@ -344,7 +349,8 @@ NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& opti
     }
   }
   if (status != 0) {
-    std::string message = complaints.empty() ? "rs274 stopped with status " + std::to_string(status) : complaints.front();
+    std::string message = complaints.empty() ? (status > 128 ? "rs274 was killed by signal " + std::to_string(status - 128) : "rs274 stopped with status " + std::to_string(status))
+                                             : complaints.front();
     int at = last_line;
     if (complaints.size() > 1) {
       // rs274 prints the offending block after its message; our N word in it gives the line.
