@@ -60,7 +60,7 @@ class PointMetric {
 
 // A zone's shape for the PCA metric: its points' running covariance, principal azimuth theta_I and
 // eigenvalue ratio, and its centre S(u_bar, v_bar).
-struct ZoneShape {
+struct ClusterShape {
   RunningCovariance<3> points;
   double principal = 0, weight = 0;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
@@ -151,7 +151,7 @@ class Partitioner {
   }
 
   void build_shapes() {
-    shapes_.assign(centroids_.size(), ZoneShape{});
+    shapes_.assign(centroids_.size(), ClusterShape{});
     for (int i = 0; i < s_.size(); ++i)
       if (labels_[static_cast<std::size_t>(i)] >= 0) shapes_[static_cast<std::size_t>(labels_[static_cast<std::size_t>(i)])].points.add(s_.points[static_cast<std::size_t>(i)]);
   }
@@ -186,7 +186,7 @@ class Partitioner {
     const Vec4& c = centroids_[static_cast<std::size_t>(k)];
     double d = metric_(x, c);
     if (!pca_) return d;
-    const ZoneShape& z = shapes_[static_cast<std::size_t>(k)];
+    const ClusterShape& z = shapes_[static_cast<std::size_t>(k)];
     const Eigen::Vector3d& p = s_.points[static_cast<std::size_t>(i)];
     const Eigen::Vector3d to_sample = p - z.centre;
     const double beta = std::atan2(to_sample.y(), to_sample.x());
@@ -207,7 +207,7 @@ class Partitioner {
   bool pca_;
   std::vector<Vec4> centroids_;
   std::vector<int> labels_;
-  std::vector<ZoneShape> shapes_;
+  std::vector<ClusterShape> shapes_;
 };
 
 // Labels renumbered 0..m-1 in order of first appearance (clusters that emptied vanish).

@@ -16,6 +16,7 @@ MachiningMesh build_machining_mesh(const geometry::NurbsSurface& surface, const 
   m.cells_v = cv;
   m.sample_cells_u = sample_cells_u;
   m.sample_cells_v = sample_cells_v;
+  m.surface = std::make_shared<const geometry::NurbsSurface>(surface);
   const auto grid = geometry::sample_grid(surface, cu, cv, geometry::GridPlacement::nodes);
   m.points.resize(grid.size());
   m.normals.resize(grid.size());

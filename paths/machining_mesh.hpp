@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include <memory>
 #include <vector>
 
 namespace drom::paths {
@@ -20,6 +21,11 @@ struct MachiningMesh {
   // Mesh cell (i, j) at index i * cells_v + j: the sample cell holding its centre, -1 outside the trim.
   std::vector<int> sample_cell;
   int sample_cells_u = 0, sample_cells_v = 0;
+  std::shared_ptr<const geometry::NurbsSurface> surface;  // what the mesh samples (for the exact variant)
+
+  // The parameters of node (i, j).
+  double node_u(int i) const { return surface->u_min() + (surface->u_max() - surface->u_min()) * i / cells_u; }
+  double node_v(int j) const { return surface->v_min() + (surface->v_max() - surface->v_min()) * j / cells_v; }
 
   int node(int i, int j) const { return i * (cells_v + 1) + j; }
   int cell(int i, int j) const { return i * cells_v + j; }

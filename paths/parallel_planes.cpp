@@ -1,5 +1,7 @@
 #include "paths/parallel_planes.hpp"
 
+#include "paths/exact_passes.hpp"
+
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -21,12 +23,19 @@ ContactStep contact_step(const Eigen::Vector3d& n, const Eigen::Matrix3d& curvat
   const Eigen::Vector3d uphill = a - a.dot(n) * n;
   c.alpha = uphill.norm() > 1e-12 ? std::acos(std::min(1.0, std::abs(along.dot(uphill.normalized())))) : 0.0;
   c.effective_radius = effective_radius(s.tool, c.slope, c.alpha);
-  const Eigen::Vector3d across = n.cross(along);
+  Eigen::Vector3d across = n.cross(along);
+  if (m.dot(across) < 0) across = -across;  // towards the next plane
   c.curvature = across.dot(curvature * across);
-  const double step = s.stepover == StepoverModel::curved ? curved_stepover(s.scallop, c.effective_radius, c.curvature)
+  const double scallop = s.exact && s.stepover == StepoverModel::curved ? s.scallop - s.chord_tolerance : s.scallop;
+  const double step = s.stepover == StepoverModel::curved ? curved_stepover(scallop, c.effective_radius, c.curvature)
                                                           : flat_stepover(s.scallop, c.effective_radius);
   c.stepover = std::min(step, level_ground_stepover(s.tool, s.scallop));
-  c.spacing = c.stepover * std::abs(m.dot(across));
+  // The plane step that moves the contact `stepover` along the surface: an arc w from p ends at
+  // p + w t + (w^2 / 2) kappa n, so the step is w (m . t) + (w^2 / 2) kappa (m . n). The seed keeps
+  // the first term only.
+  const double w = c.stepover;
+  c.spacing = w * m.dot(across);
+  if (s.stepover != StepoverModel::seed) c.spacing = std::max(1e-3 * c.spacing, c.spacing + 0.5 * w * w * c.curvature * m.dot(n));
   return c;
 }
 
@@ -211,6 +220,31 @@ std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, doubl
       p.cc.push_back(mesh.points[A] + x.t * (mesh.points[B] - mesh.points[A]));
       p.normals.push_back((mesh.normals[A] + x.t * (mesh.normals[B] - mesh.normals[A])).normalized());
       curvatures.push_back(mesh.curvature[A] + x.t * (mesh.curvature[B] - mesh.curvature[A]));
+    }
+    if (s.exact) {
+      // The same crossings solved on the true iso-curves, then refined along the true intersection.
+      std::vector<IsoCrossing> iso;
+      const int row = mesh.cells_v + 1;
+      for (const auto& x : chain) {
+        const int ia = x.a / row, ja = x.a % row, ib = x.b / row, jb = x.b % row;
+        IsoCrossing c;
+        c.along_u = ja == jb;
+        const double ua = mesh.node_u(ia), ub = mesh.node_u(ib), va = mesh.node_v(ja), vb = mesh.node_v(jb);
+        c.u = ua + x.t * (ub - ua);
+        c.v = va + x.t * (vb - va);
+        c.lo = c.along_u ? std::min(ua, ub) : std::min(va, vb);
+        c.hi = c.along_u ? std::max(ua, ub) : std::max(va, vb);
+        iso.push_back(c);
+      }
+      const auto contacts = exact_chain(*mesh.surface, s.axis.cross(s.feed).normalized(), level, iso, p.normals, s.chord_tolerance);
+      p.cc.clear();
+      p.normals.clear();
+      curvatures.clear();
+      for (const auto& c : contacts) {
+        p.cc.push_back(c.point);
+        p.normals.push_back(c.normal);
+        curvatures.push_back(c.curvature);
+      }
     }
     if ((p.cc.back() - p.cc.front()).dot(s.feed) < 0) {
       std::reverse(p.cc.begin(), p.cc.end());

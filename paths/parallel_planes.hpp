@@ -34,6 +34,10 @@ struct PassSettings {
   // The tool axis, and the feed direction (unit, perpendicular to the axis), in the part's frame.
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
   Eigen::Vector3d feed = Eigen::Vector3d::UnitX();
+  // The exact variant (exact_passes.hpp): contact points on the surface, chords within this
+  // tolerance (mm); the curved model then keeps the scallop plus the chord deviation within sh.
+  bool exact = false;
+  double chord_tolerance = 2e-4;
 };
 
 struct Pass {

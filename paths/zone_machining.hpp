@@ -22,6 +22,8 @@ struct FinishingSettings {
   double scallop = 0.01;
   StepoverModel stepover = StepoverModel::curved;
   bool zigzag = true;
+  bool exact = false;              // the exact (Newton) variant of the passes; else the seed's fast iso-line one
+  double chord_tolerance = 2e-4;   // mm, the exact variant's chords
   Accounting accounting = Accounting::machine;
   // Times every pass, link and move (the seed's 5 m/min feed; rapids at 25 m/min).
   MoveTimer timer{Kinematics{}, Kinematics{25000.0 / 60, 6000, 40000}};
@@ -37,6 +39,7 @@ struct ZoneSetup {
   double azimuth = 0;
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double zeta = 0;  // the PCA heuristic's tilt about the zone's X_II (informative; 0 for other setups)
   // The tool axis and the feed, in the part frame.
   Eigen::Vector3d axis() const { return rotation.transpose() * Eigen::Vector3d::UnitZ(); }
   Eigen::Vector3d feed() const;
