@@ -40,5 +40,6 @@ int offline_command(const CommandOptions& options);  // drom offline
 int truth_command(const CommandOptions& options);    // drom truth
 int reduce_command(const CommandOptions& options);   // drom reduce
 int deviation_command(const CommandOptions& options);  // drom deviation
+int finish_command(const CommandOptions& options);     // drom finish
 
 }  // namespace drom::app
