@@ -28,7 +28,7 @@ FinishCase load_finish_case(const std::filesystem::path& path, const std::vector
   const std::string kind = r.choice("tool.kind", {"ball", "torus", "auto"}, "auto");
   const double radius = r.real("tool.radius", Range::positive(), 5);
   const double corner = r.real("tool.corner_radius", Range::positive(), 2);
-  if (kind != "ball" && corner >= radius) r.fail("tool.corner_radius", "must be below tool.radius (" + std::to_string(radius) + ")");
+  if (kind != "ball" && corner >= radius) r.fail("tool.corner_radius", "must be below tool.radius");
   c.auto_tool = kind == "auto";
   c.ball = Tool{ToolKind::ball, radius, radius};
   c.torus = Tool{ToolKind::torus, radius, corner};
@@ -47,9 +47,11 @@ FinishCase load_finish_case(const std::filesystem::path& path, const std::vector
   // [finish]
   const double smallest_radius = kind == "ball" ? radius : corner;
   c.settings.scallop = r.real("finish.scallop", Range::positive(), 0.01);
-  if (c.settings.scallop >= smallest_radius)
-    r.fail("finish.scallop", "must be below the tool's " + std::string(kind == "ball" ? "radius" : "corner radius") + " (" + std::to_string(smallest_radius) +
-                                 " mm): a scallop that high is not a finish");
+  if (c.settings.scallop >= smallest_radius) {
+    std::ostringstream msg;
+    msg << "must be below the tool's " << (kind == "ball" ? "radius" : "corner radius") << " (" << smallest_radius << " mm): a scallop that high is not a finish";
+    r.fail("finish.scallop", msg.str());
+  }
   const std::string stepover = r.choice("finish.stepover", {"curved", "flat", "seed"}, "curved");
   c.settings.stepover = stepover == "curved" ? StepoverModel::curved : stepover == "flat" ? StepoverModel::flat : StepoverModel::seed;
   c.settings.exact = r.choice("finish.variant", {"exact", "fast"}, "exact") == "exact";
@@ -59,6 +61,13 @@ FinishCase load_finish_case(const std::filesystem::path& path, const std::vector
   c.settings.accounting = r.choice("finish.accounting", {"machine", "seed"}, "machine") == "machine" ? Accounting::machine : Accounting::seed;
   const std::string setup = r.choice("finish.setup", {"3-axis", "3+2", "heuristic"}, "3-axis");
   c.setup = setup == "3-axis" ? SetupMode::three_axis : setup == "3+2" ? SetupMode::three_plus_two : SetupMode::pca_heuristic;
+  const bool turned = c.setup != SetupMode::three_axis || r.has("finish.orientation");
+  c.machine_definition = r.text("machine.definition", std::string(turned ? "ucp710_like" : "vmc_3axis"));
+  if (!std::filesystem::path(c.machine_definition).has_extension()) {
+    // a shipped machine's name
+  } else if (std::filesystem::path(c.machine_definition).is_relative()) {
+    c.machine_definition = (path.parent_path() / c.machine_definition).string();
+  }
   c.samples = static_cast<int>(r.integer("finish.samples", 4, 400, 80));
   c.mesh_step = r.real("finish.mesh_step", Range::open_closed(0, 10), 0.5);
   if (r.has("finish.orientation")) {

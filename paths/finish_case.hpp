@@ -21,6 +21,7 @@ struct FinishCase {
   bool auto_tool = false;           // the PCA verdict picks ball or torus
   Tool ball{ToolKind::ball, 5, 5}, torus{ToolKind::torus, 5, 2};
   FinishingSettings settings;       // the tool in it is the case's (the torus when auto, until the verdict)
+  std::string machine_definition;   // machine/'s definition (a file or a shipped name): times and posts the program
   int samples = 80;                 // clustering grid, per side
   double mesh_step = 0.5;           // mm
   SetupMode setup = SetupMode::three_axis;

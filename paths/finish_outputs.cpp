@@ -107,41 +107,39 @@ void write_cl_csv(const std::filesystem::path& path, const FinishingPlan& plan, 
   write_file_atomically(path, csv.str());
 }
 
-std::string three_axis_program(const FinishingPlan& plan, const Tool& tool, double feed, double plunge, double clearance, double approach, const std::string& title) {
-  for (const auto& z : plan.zones)
-    if (!z.setup.rotation.isApprox(Eigen::Matrix3d::Identity(), 1e-12))
-      throw std::invalid_argument("zone " + std::to_string(z.zone) + " is turned (3+2): a 3-axis program cannot machine it");
-  double top = -std::numeric_limits<double>::infinity();
-  for (const auto& z : plan.zones)
-    for (const auto& p : z.passes)
-      for (std::size_t i = 0; i < p.cc.size(); ++i) top = std::max(top, cutter_location(p.cc[i], p.normals[i], tool, Eigen::Vector3d::UnitZ()).z());
-  const double safe = top + clearance;
-  std::ostringstream g;
-  g << std::fixed << std::setprecision(4);
-  g << "(" << title << ")\n(tool: " << tool.name() << ", positions are the tool tip; units mm)\nG21 G90 G17\nG0 Z" << safe << "\n";
-  const auto xyz = [&](const Eigen::Vector3d& q) {
-    std::ostringstream s;
-    s << std::fixed << std::setprecision(4) << "X" << q.x() << " Y" << q.y() << " Z" << q.z();
-    return s.str();
-  };
-  const auto enter = [&](const Eigen::Vector3d& q, double up) {
-    g << "G0 Z" << up << "\nG0 X" << q.x() << " Y" << q.y() << "\nG0 Z" << q.z() + approach << "\nG1 Z" << q.z() << " F" << plunge << "\n";
+machine::ClProgram cl_program(const FinishingPlan& plan, const Tool& tool, double feed, double clearance, double approach) {
+  machine::ClProgram cl;
+  cl.origin = "drom finish";
+  const auto add = [&](const Eigen::Vector3d& tip, const Eigen::Vector3d& axis, double f, bool rapid) {
+    machine::ClPoint p;
+    p.pose.tip = tip;
+    p.pose.axis = axis;
+    p.feed = f;
+    p.rapid = rapid;
+    cl.points.push_back(p);
   };
   for (const auto& z : plan.zones) {
-    g << "(zone " << z.zone << ", feed azimuth " << std::setprecision(2) << z.setup.azimuth * kDeg << " deg)\n" << std::setprecision(4);
+    const Eigen::Vector3d axis = z.setup.axis();
     for (std::size_t k = 0; k < z.passes.size(); ++k) {
       const Pass& p = z.passes[k];
       std::vector<Eigen::Vector3d> tips;
-      for (std::size_t i = 0; i < p.cc.size(); ++i) tips.push_back(cutter_location(p.cc[i], p.normals[i], tool, Eigen::Vector3d::UnitZ()));
-      if (k == 0) enter(tips.front(), safe);
-      else if (z.retract_before[k]) enter(tips.front(), std::max(tips.front().z(), z.passes[k - 1].cc.back().z()) + clearance);
-      else g << "G1 " << xyz(tips.front()) << " F" << feed << "\n";
-      for (std::size_t i = 1; i < tips.size(); ++i) g << "G1 " << xyz(tips[i]) << "\n";
+      for (std::size_t i = 0; i < p.cc.size(); ++i) tips.push_back(cutter_location(p.cc[i], p.normals[i], tool, axis));
+      if (k == 0 || z.retract_before[k]) {
+        if (k > 0) {
+          const Eigen::Vector3d& last = cl.points.back().pose.tip;
+          add(last + clearance * axis, axis, feed, true);
+        }
+        add(tips.front() + clearance * axis, axis, feed, true);
+        add(tips.front() + approach * axis, axis, feed, true);
+        add(tips.front(), axis, feed / 2, false);
+      } else {
+        add(tips.front(), axis, feed, false);
+      }
+      for (std::size_t i = 1; i < tips.size(); ++i) add(tips[i], axis, feed, false);
     }
-    g << "G0 Z" << safe << "\n";
+    if (!cl.points.empty()) add(cl.points.back().pose.tip + clearance * axis, axis, feed, true);
   }
-  g << "M2\n";
-  return g.str();
+  return cl;
 }
 
 void write_breakdown_csv(const std::filesystem::path& path, const FinishingPlan& plan) {

@@ -5,6 +5,7 @@
 #include "paths/clustering.hpp"
 #include "paths/finishing_plan.hpp"
 #include "paths/surface_samples.hpp"
+#include "machine/cl_data.hpp"
 
 #include <filesystem>
 #include <string>
@@ -17,9 +18,10 @@ void write_zone_map(const std::filesystem::path& path, const geometry::NurbsSurf
 void write_pass_polylines(const std::filesystem::path& path, const FinishingPlan& plan, const Tool& tool);
 // zone, pass, point, tool tip (part frame), tool axis, contact point, tool tip in the zone's machine frame.
 void write_cl_csv(const std::filesystem::path& path, const FinishingPlan& plan, const Tool& tool);
-// A 3-axis ISO program (G21 G90 G17, G0/G1); throws std::invalid_argument if a zone is turned (3+2).
-std::string three_axis_program(const FinishingPlan& plan, const Tool& tool, double feed_mm_per_min, double plunge_mm_per_min, double clearance,
-                               double approach, const std::string& title);
+// The plan as cutter-location data for machine/ (tool tips and axes in the part frame): each zone
+// entered from `clearance` above its first tip along its tool axis by rapids, the last `approach` mm
+// plunged at half the feed, its passes and links at the feed, its retracts by rapids.
+machine::ClProgram cl_program(const FinishingPlan& plan, const Tool& tool, double feed_mm_per_min, double clearance, double approach);
 // Per zone: setup, passes, times and lengths; then the moves between zones and the totals.
 void write_breakdown_csv(const std::filesystem::path& path, const FinishingPlan& plan);
 

@@ -3,7 +3,10 @@
 #include "paths/finish_outputs.hpp"
 #include "paths/plane_model.hpp"
 #include "paths/scallop_check.hpp"
+#include "machine/feed_prediction.hpp"
+#include "machine/post_processor.hpp"
 #include "support/atomic_file.hpp"
+#include "support/input_error.hpp"
 #include "support/png_plot.hpp"
 #include "support/summary.hpp"
 #include "support/version.hpp"
@@ -221,17 +224,29 @@ json run_finish(const FinishCase& c, const FinishRunOptions& o) {
   write_pass_polylines(o.out / "paths.vtp", plan, settings.tool);
   write_cl_csv(o.out / "cl.csv", plan, settings.tool);
   write_breakdown_csv(o.out / "breakdown.csv", plan);
-  bool turned = false;
-  for (const auto& s : setups) turned = turned || !s.rotation.isApprox(Eigen::Matrix3d::Identity(), 1e-12);
+  // The program: machine/'s inverse kinematics, feed predictor and post-processor on the case's machine.
   std::string program_note;
-  if (!turned) {
-    write_file_atomically(o.out / "program.ngc", three_axis_program(plan, settings.tool, settings.timer.cutting().feed * 60, settings.timer.cutting().feed * 60 / 2,
-                                                                     settings.clearance, settings.approach, "drom finish " + c.name));
-    files.push_back("program.ngc");
-  } else {
-    program_note = "3+2 zones: no program written until machine/'s post-processor is merged; cl.csv holds every zone's tool tips in its machine frame";
-    say("  " + program_note);
+  double predicted = -1;
+  try {
+    const machine::Machine m = machine::load_machine(c.machine_definition);
+    const machine::Kinematics kinematics(m);
+    const machine::ClProgram cl = cl_program(plan, settings.tool, settings.timer.cutting().feed * 60, settings.clearance, settings.approach);
+    const machine::ClOnMachine on = machine::cl_to_machine_program(cl, kinematics);
+    if (!on.joints.violations.empty()) {
+      program_note = "no program: on " + m.name + ", " + on.joints.violations.front().what;
+    } else {
+      predicted = machine::predict_feed(on.program, kinematics).cycle_time;
+      write_file_atomically(o.out / "program.ngc", machine::post_process(cl, kinematics, {"drom finish " + c.name}));
+      files.push_back("program.ngc");
+      std::ostringstream line;
+      line.precision(4);
+      line << "  program for " << m.name << ": cycle time " << predicted << " s predicted by machine/ (junctions, per-axis limits, rapids)";
+      say(line.str());
+    }
+  } catch (const InputError& e) {
+    program_note = std::string("no program: ") + e.what();
   }
+  if (!program_note.empty()) say("  " + program_note);
   if (!optima.empty()) {
     std::ostringstream csv;
     csv << "clusters,black_box_equivalents,best_time_s\n";
@@ -263,7 +278,9 @@ json run_finish(const FinishCase& c, const FinishRunOptions& o) {
   s["stepover_model"] = settings.stepover == StepoverModel::curved ? "curved" : settings.stepover == StepoverModel::flat ? "flat" : "seed";
   s["variant"] = settings.exact ? "exact" : "fast";
   s["accounting"] = settings.accounting == Accounting::machine ? "machine" : "seed";
-  s["time_model"] = "seed closed forms (machine/'s predictor not merged yet)";
+  s["time_model"] = "search: machine/'s double S per move; program: machine/'s feed predictor";
+  s["machine"] = c.machine_definition;
+  if (predicted >= 0) s["predicted_cycle_time_s"] = predicted;
   s["pca"] = {{"lambda", {plane.lambda(0), plane.lambda(1), plane.lambda(2)}},
               {"shape_factor", plane.shape_factor},
               {"size_mm2", plane.size},

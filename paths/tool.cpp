@@ -41,11 +41,6 @@ double curved_stepover(double scallop, double effective_radius, double curvature
   return 4 * std::asin(k * q) / k;
 }
 
-double flat_scallop(double stepover, double effective_radius) {
-  if (std::isinf(effective_radius)) return 0;
-  return effective_radius - std::sqrt(effective_radius * effective_radius - stepover * stepover / 4);
-}
-
 double level_ground_stepover(const Tool& tool, double scallop) {
   if (tool.kind == ToolKind::ball) return flat_stepover(scallop, tool.radius);
   return 2 * (tool.radius - tool.corner_radius) + flat_stepover(scallop, tool.corner_radius);
