@@ -9,6 +9,7 @@ namespace drom::paths {
 std::string Tool::name() const {
   std::ostringstream s;
   if (kind == ToolKind::ball) s << "ball R" << radius;
+  else if (corner_radius == 0) s << "flat R" << radius;  // a torus without corner: a flat end mill (point clouds' roughing)
   else s << "torus R" << radius << " r" << corner_radius;
   return s.str();
 }
@@ -43,6 +44,7 @@ double curved_stepover(double scallop, double effective_radius, double curvature
 
 double flat_scallop(double stepover, double effective_radius) {
   if (std::isinf(effective_radius)) return 0;
+  if (stepover >= 2 * effective_radius) return effective_radius;  // the traces no longer meet: the tool's whole height stands
   return effective_radius - std::sqrt(effective_radius * effective_radius - stepover * stepover / 4);
 }
 

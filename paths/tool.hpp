@@ -32,7 +32,8 @@ double flat_stepover(double scallop, double effective_radius);
 // tool's trace (1/curvature <= R_eff + sh): the tool gouges there and no step keeps the bound.
 double curved_stepover(double scallop, double effective_radius, double curvature);
 
-// The scallop height two traces of radius R_eff leave `stepover` apart on flat ground (eq. 2.3 inverted).
+// The scallop height two traces of radius R_eff leave `stepover` apart on flat ground (eq. 2.3 inverted); R_eff itself
+// once the step reaches 2 R_eff.
 double flat_scallop(double stepover, double effective_radius);
 
 // The widest step a torus can take on level ground: its flat bottom plus two corner traces,
