@@ -4,6 +4,7 @@
 #include "geometry/point_cloud.hpp"
 #include "paths/tool_drop.hpp"
 
+#include <Eigen/Geometry>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
