@@ -44,7 +44,7 @@ CloudRoughing plan_cloud_roughing(const geometry::CloudVoxelMap& map, const Eige
   // A barycentre stands for its voxel's points (within the diagonal) and for the tool's move to the
   // next node (within half a step): both widen the tool.
   const double diagonal = map.edge() * std::sqrt(3.0);
-  const double half_step = 0.5 * std::max(s.longitudinal_step, s.transverse_step);
+  const double half_step = 0.5 * s.longitudinal_step;  // moves along a pass; links across are checked on their own
   out.inflation = diagonal + half_step;
   // The height every node must keep above: the barycentres' highest within the widened tool, plus the
   // allowance and the diagonal (the axial part of the same two).
@@ -156,6 +156,19 @@ CloudRoughing plan_cloud_roughing(const geometry::CloudVoxelMap& map, const Eige
         const Eigen::Vector3d a(X(node_at(k)), Y(j), z), b(X(node_at(e)), Y(j), z);
         const double length = (b - a).norm();
         const Eigen::Vector3d forward(reverse ? -1 : 1, 0, 0);
+        // Joined to the last segment at the layer's level when it ends next to this one's start and
+        // the straight move clears the cloud (the zigzag of a layer): no entry needed.
+        const Eigen::Vector3d at = path.tips.back();
+        if (down && std::abs(at.z() - z) < 1e-9 && (a - at).head<2>().norm() <= 1.5 * std::max(s.longitudinal_step, s.transverse_step) + 1e-9 &&
+            line_is_clear(at, a, kInfinity)) {
+          ++out.links;
+          path.add(a, Motion::link, static_cast<int>(layer));
+          for (int t = k + 1; t <= e; ++t) path.add({X(node_at(t)), Y(j), z}, Motion::cut, static_cast<int>(layer));
+          for (int t = k; t <= e; ++t) cut_here.push_back(id(node_at(t), j));
+          out.cut += e - k + 1;
+          k = e + 1;
+          continue;
+        }
         // Entry: from the side, where the node before lies outside the stock and open down to the layer.
         std::vector<Eigen::Vector3d> entry;  // the first point is reached from above
         const Eigen::Vector3d outside = a - forward * s.longitudinal_step;
@@ -168,7 +181,7 @@ CloudRoughing plan_cloud_roughing(const geometry::CloudVoxelMap& map, const Eige
         } else {
           // A ramp down from the layer above: straight along the segment, or zigzag within it.
           const double run = (above - z) / tan_ramp, leg = std::min(run, length);
-          bool ok = leg >= std::max(s.longitudinal_step, cutter.radius) - 1e-9;
+          bool ok = leg >= std::max(s.longitudinal_step, 1.0) - 1e-9;  // a leg of one node step at least
           std::vector<Eigen::Vector3d> ramp;
           if (ok) {
             ramp.push_back({a.x(), a.y(), above});
@@ -193,21 +206,12 @@ CloudRoughing plan_cloud_roughing(const geometry::CloudVoxelMap& map, const Eige
           (ramp.size() > 3 ? out.zigzag_ramps : out.ramps) += 1;
           entry = ramp;
         }
-        // Joined to the last segment at the layer's level when it ends next to this entry and the
-        // straight move clears the cloud; else retract, traverse, descend.
+        // Retract, traverse, descend to the entry's first point (down an open column), enter.
         const Eigen::Vector3d start = entry.front();
-        const Eigen::Vector3d at = path.tips.back();
-        const bool joined = down && std::abs(start.z() - z) < 1e-9 && (start - at).head<2>().norm() <= 1.5 * std::max(s.longitudinal_step, s.transverse_step) + 1e-9 &&
-                            line_is_clear(at, start, kInfinity);
-        if (joined) {
-          ++out.links;
-          path.add(start, Motion::link);
-        } else {
-          retract();
-          path.add({start.x(), start.y(), traverse}, Motion::rapid);
-          path.add({start.x(), start.y(), std::min(traverse, start.z() + s.clearance)}, Motion::rapid);
-          path.add(start, Motion::cut, static_cast<int>(layer));
-        }
+        retract();
+        path.add({start.x(), start.y(), traverse}, Motion::rapid);
+        path.add({start.x(), start.y(), std::min(traverse, start.z() + s.clearance)}, Motion::rapid);
+        path.add(start, Motion::cut, static_cast<int>(layer));
         for (std::size_t r = 1; r < entry.size(); ++r) path.add(entry[r], Motion::cut, static_cast<int>(layer));
         for (int t = k + 1; t <= e; ++t) path.add({X(node_at(t)), Y(j), z}, Motion::cut, static_cast<int>(layer));
         for (int t = k; t <= e; ++t) cut_here.push_back(id(node_at(t), j));
