@@ -47,5 +47,6 @@ int truth_command(const CommandOptions& options);    // drom truth
 int reduce_command(const CommandOptions& options);   // drom reduce
 int deviation_command(const CommandOptions& options);  // drom deviation
 int machine_command(const CommandOptions& options);    // drom machine
+int finish_command(const CommandOptions& options);     // drom finish
 
 }  // namespace drom::app

@@ -33,6 +33,8 @@ int main(int argc, char** argv) {
       {"truth", "simulate the machining for the case's own stress profile, with full fields", drom::app::truth_command},
       {"reduce", "compress an offline database into the light model the online predictor loads", drom::app::reduce_command},
       {"deviation", "learn an unknown blank's deviation from laser profiles during the approach (seed chapter 2)", drom::app::deviation_command},
+      {"finish", "finishing paths on a free-form surface in the least time under a scallop bound (zoning, tool choice, 3-axis or 3+2)",
+       drom::app::finish_command},
       {"mesh", "mesh the case's part and write it with its clamps to VTK", drom::app::mesh_command},
       {"check", "validate a case file and print it with every override applied", drom::app::check_command},
       {"machine", "a program (G-code or CL data) on a machine: travel, singularities, the feed it really reaches, the limiting axes, the cycle time",
@@ -79,6 +81,8 @@ int main(int argc, char** argv) {
       cmd->add_option("--param", options.study_parameter, "the parameter: noise, angle, refresh, calibration, desync, amplitude or seed (the noise draw)")->required();
       cmd->add_option("--values", options.study_values, "its values, e.g. --values 0,0.02,0.05")->required()->delimiter(',');
     }
+    if (std::string(sub.name) == "finish")
+      cmd->add_option("--threads", options.threads, "K values optimised at once (default: one per hardware thread)")->check(CLI::PositiveNumber);
     if (std::string(sub.name) == "offline" || std::string(sub.name) == "truth") {
       cmd->add_flag("--resume", options.resume, "continue the interrupted run in --out (refuses a different case)");
       cmd->add_option("--stop-after", options.stop_after, "solve at most N stations in this invocation, then stop (resume later)")->check(CLI::NonNegativeNumber);

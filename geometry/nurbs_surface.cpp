@@ -137,6 +137,9 @@ NurbsSurface::NurbsSurface(int degree_u, int degree_v, std::vector<double> knots
   }
 }
 
+NurbsSurface::NurbsSurface()
+    : NurbsSurface(1, 1, {0, 0, 1, 1}, {0, 0, 1, 1}, 2, 2, {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 1, 0), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(1, 1, 0)}) {}
+
 NurbsSurface NurbsSurface::bezier(int count_u, int count_v, std::vector<Eigen::Vector3d> points, std::vector<double> weights) {
   if (count_u < 2 || count_v < 2) throw std::invalid_argument("a Bézier patch needs at least 2 x 2 control points");
   std::vector<double> ku(static_cast<std::size_t>(2 * count_u), 0.0), kv(static_cast<std::size_t>(2 * count_v), 0.0);

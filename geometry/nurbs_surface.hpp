@@ -18,6 +18,9 @@ class NurbsSurface {
  public:
   static constexpr int kMaxDegree = 25;  // OpenCASCADE's limit too
 
+  // The flat unit square z = 0 (bilinear), so holders of a surface can be default-constructed.
+  NurbsSurface();
+
   // Control point (i, j), i along u and j along v, is points[i * count_v + j]. Knot vectors are
   // clamped or not, of size count + degree + 1, non-decreasing, with a non-empty domain. Weights are
   // positive; empty means all 1 (a non-rational B-spline). Throws std::invalid_argument, saying what

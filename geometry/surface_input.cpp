@@ -24,7 +24,7 @@ std::vector<Eigen::Vector3d> read_points(TomlReader& r, const std::string& key, 
 
 SurfaceInput read_surface(TomlReader& r, const std::string& table, const std::filesystem::path& base_dir) {
   const std::string t = table + ".";
-  SurfaceInput in{NurbsSurface::bezier(2, 2, {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 1, 0), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(1, 1, 0)}), {}, "", "", {}, 0};
+  SurfaceInput in;
   in.kind = r.choice(t + "kind", {"bezier", "bspline", "nurbs", "step"});
   std::string net_key = t + "points";
   if (in.kind == "step") {

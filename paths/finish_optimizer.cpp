@@ -385,11 +385,22 @@ KOptimum optimize_clusters(const FinishingProblem& problem, int clusters, const 
     }
     return t;
   };
+  // A search step before the poll (NOMAD has one too): the seed's start and the partitions by one
+  // or two features alone; the poll starts from the best of them.
+  Eigen::VectorXd start = Eigen::Vector4d::Ones();
+  double start_value = std::numeric_limits<double>::infinity();
+  const Eigen::Vector4d probes[] = {Eigen::Vector4d::Ones(),      Eigen::Vector4d(1, 0, 0, 0), Eigen::Vector4d(0, 1, 0, 0), Eigen::Vector4d(0, 0, 1, 0),
+                                    Eigen::Vector4d(0, 0, 0, 1), Eigen::Vector4d(1, 1, 0, 0), Eigen::Vector4d(0, 0, 1, 1)};
+  for (const auto& w : probes) {
+    if (search.spent() >= settings.budget) break;
+    const MadsPoint p = evaluate(w);
+    if (p.value < start_value) start_value = p.value, start = w;
+  }
   MadsSettings ms;
-  ms.budget = settings.budget;
+  ms.budget = settings.budget - search.spent();
   ms.initial_step = 0.25;
   ms.minimum_step = 1.0 / 64;
-  mads_minimize(evaluate, rank, Eigen::Vector4d::Ones(), Eigen::Vector4d::Zero(), Eigen::Vector4d::Ones(), ms);
+  if (ms.budget > 0) mads_minimize(evaluate, rank, start, Eigen::Vector4d::Zero(), Eigen::Vector4d::Ones(), ms);
   k.best_time = std::min(best, k.start_time);
   if (!(best <= k.start_time)) {
     // Nothing beat the start (cannot happen unless the budget ran out first): keep the start.

@@ -1,5 +1,7 @@
 #include "paths/move_time.hpp"
 
+#include "machine/scurve.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -7,18 +9,7 @@ namespace drom::paths {
 
 double rest_to_rest_time(double length, const Kinematics& k) {
   if (!(length > 0)) return 0;
-  const double V = k.feed, A = k.acceleration, J = k.jerk;
-  if (V * J >= A * A) {
-    // A is reachable on the way to V.
-    const double full = V * (V / A + A / J);  // distance of the acceleration and deceleration phases at V
-    if (length >= full) return length / V + V / A + A / J;
-    const double ramp = A * A / J;  // the speed gained while the jerk raises A from 0 and back
-    const double v = 0.5 * (-ramp + std::sqrt(ramp * ramp + 4 * A * length));
-    if (v >= ramp) return 2 * (v / A + A / J);
-  } else if (length >= 2 * V * std::sqrt(V / J)) {
-    return length / V + 2 * std::sqrt(V / J);
-  }
-  return 4 * std::cbrt(length / (2 * J));
+  return machine::plan_double_s(0, 0, length, machine::MotionLimits{k.feed, k.acceleration, k.jerk}).duration();
 }
 
 double polyline_length(const std::vector<Eigen::Vector3d>& points) {

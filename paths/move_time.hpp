@@ -1,8 +1,10 @@
 #pragma once
 // How long the machine takes over a finishing pass, a link between passes, and a move between
-// zones. This is the one place path planning asks; until machine/'s feed and cycle-time predictor
-// is merged it answers with the seed's jerk-limited closed forms (Herraz §1.6.2), completed with
-// the case the seed leaves out (acceleration limit reached, feed not).
+// zones, inside the search: each move rest to rest under machine/'s jerk-limited double S
+// (machine/scurve.hpp) with the path's limits (the seed's model, Herraz §1.6.2, which machine/'s
+// double S reproduces and completes). The program finally written is timed by machine/'s full
+// feed predictor (junction speeds, per-axis limits) in finish_run.cpp; this cheaper model is what
+// thousands of evaluations per K can afford (docs/finishing.md measures both).
 #include <Eigen/Core>
 
 #include <vector>
@@ -16,10 +18,8 @@ struct Kinematics {
   double jerk = 40000;         // J, mm/s^3
 };
 
-// A straight move of `length` from rest to rest under a symmetric 7-phase jerk-limited profile:
-// t = L/V + V/A + A/J where V and A are reached (seed eq. 1.13), L/V + 2 sqrt(V/J) where only V is
-// (eq. 1.14), 4 (L / 2J)^(1/3) where neither is (eq. 1.15, with 2l = L), and 2 (v/A + A/J) with
-// v^2 + v A^2/J - A L = 0 where A is reached but V is not.
+// A straight move of `length` from rest to rest: machine/'s double S (the seed's eqs. 1.13-1.15 and
+// the regime they leave out).
 double rest_to_rest_time(double length, const Kinematics& limits);
 
 class MoveTimer {

@@ -236,7 +236,9 @@ std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, doubl
         c.hi = c.along_u ? std::max(ua, ub) : std::max(va, vb);
         iso.push_back(c);
       }
-      const auto contacts = exact_chain(*mesh.surface, s.axis.cross(s.feed).normalized(), level, iso, p.normals, s.chord_tolerance);
+      // Half the tolerance on the contact curve: the tool-tip curve, offset from it, bends up to a
+      // few times more sharply where the ground is concave.
+      const auto contacts = exact_chain(*mesh.surface, s.axis.cross(s.feed).normalized(), level, iso, p.normals, 0.5 * s.chord_tolerance);
       p.cc.clear();
       p.normals.clear();
       curvatures.clear();

@@ -23,6 +23,7 @@ ZoneMachining machine_zone(const MachiningMesh& mesh, const std::vector<int>& ce
     z.pass_length += polyline_length(line);
     z.timed_lines.push_back(std::move(line));
   }
+  z.retract_before.assign(z.passes.size(), false);
   for (std::size_t k = 1; k < z.passes.size(); ++k) {
     const Eigen::Vector3d &from = z.timed_lines[k - 1].back(), &to = z.timed_lines[k].front();
     const double d = (to - from).norm();
@@ -31,6 +32,7 @@ ZoneMachining machine_zone(const MachiningMesh& mesh, const std::vector<int>& ce
     if (machine && (same_plane || d > longest_link)) {
       z.retract_time += s.timer.repositioning(from, to, std::max(from.z(), to.z()) + s.clearance, s.approach);
       ++z.retracts;
+      z.retract_before[k] = true;
     } else {
       z.link_time += s.timer.link(from, to);
       z.link_length += d;
@@ -43,6 +45,10 @@ ZoneMachining machine_zone(const MachiningMesh& mesh, const std::vector<int>& ce
 void reverse_zone(ZoneMachining& z) {
   std::reverse(z.passes.begin(), z.passes.end());
   std::reverse(z.timed_lines.begin(), z.timed_lines.end());
+  // The move into pass k becomes the move out of it: shift the flags by one.
+  std::vector<bool> flags(z.retract_before.size(), false);
+  for (std::size_t k = 1; k < flags.size(); ++k) flags[k] = z.retract_before[flags.size() - k];
+  z.retract_before = flags;
   for (auto& p : z.passes) {
     std::reverse(p.cc.begin(), p.cc.end());
     std::reverse(p.normals.begin(), p.normals.end());

@@ -52,6 +52,7 @@ struct ZoneMachining {
   std::vector<Pass> passes;
   // The polylines timed, machine frame, one per pass: tool tips (machine accounting) or contact points (the seed's).
   std::vector<std::vector<Eigen::Vector3d>> timed_lines;
+  std::vector<bool> retract_before;  // per pass: the move into it is a retract (else a link; false for the first)
   double pass_time = 0, link_time = 0, retract_time = 0;
   double pass_length = 0, link_length = 0;
   int links = 0, retracts = 0;
