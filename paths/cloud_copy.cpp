@@ -30,6 +30,15 @@ class Stopwatch {
     start_ = std::chrono::steady_clock::now();
     cpu_ = process_cpu_seconds();
   }
+  // Adds the time since the last mark to `name` (a stage run in pieces, one per packet).
+  void add_to(const std::string& name) {
+    const double wall = seconds_since(start_), cpu = process_cpu_seconds() - cpu_;
+    auto it = std::find_if(times_.begin(), times_.end(), [&](const StageTime& t) { return t.stage == name; });
+    if (it == times_.end()) times_.push_back({name, wall, cpu});
+    else it->wall += wall, it->cpu += cpu;
+    start_ = std::chrono::steady_clock::now();
+    cpu_ = process_cpu_seconds();
+  }
 
  private:
   std::vector<StageTime>& times_;
@@ -145,7 +154,8 @@ CopyResult copy_cloud(const geometry::PointCloud& cloud, const CopySettings& s, 
 
   // 5. Per packet: its drop frame, roughing, finishing, programs and checks.
   std::optional<geometry::CloudVoxelMap> map;
-  if (s.rough) map.emplace(cloud.points, roughing_voxel(s.roughing));
+  if (s.rough) map.emplace(collision, roughing_voxel(s.roughing));  // the obstacles too: roughing must not enter the base or a fixture
+  watch.add_to("roughing");
   const auto sizes = out.packets.sizes();
   for (std::size_t k = 0; k < out.packets.directions.size(); ++k) {
     PacketPlan plan;
@@ -158,6 +168,7 @@ CopyResult copy_cloud(const geometry::PointCloud& cloud, const CopySettings& s, 
     for (std::size_t i = 0; i < out.row_points.size(); ++i)
       if (out.packets.packet_of[i] == static_cast<int>(k)) mine.push_back(plan.frame * out.row_points[i]);
     const geometry::CloudBins bins(geometry::rotated(collision, plan.frame), std::max(0.25, s.finishing.tool.cutter.radius / 2));
+    watch.add_to("finishing");
     const std::string name = "packet " + std::to_string(k + 1);
     say(name + ": axis (" + std::to_string(plan.axis.x()).substr(0, 6) + ", " + std::to_string(plan.axis.y()).substr(0, 6) + ", " + std::to_string(plan.axis.z()).substr(0, 6) +
         "), " + std::to_string(plan.points) + " points");
@@ -173,6 +184,7 @@ CopyResult copy_cloud(const geometry::PointCloud& cloud, const CopySettings& s, 
       plan.roughing = plan_cloud_roughing(*map, plan.frame, stock, area, bottom, s.roughing);
       make_program(plan.rough_op, plan.roughing->path, plan.frame, s.roughing_feed, name + " roughing", 2, s, kin);
       plan.rough_op.check = check_path(bins, plan.roughing->path, s.roughing.tool, s.roughing.tool.cutter.radius / 4, 0);
+      watch.add_to("roughing");
     }
     try {
       const CloudArea area(mine, std::max(s.finishing.longitudinal_step, s.normals.grid_step), s.finishing.tool.cutter.radius);
@@ -182,9 +194,9 @@ CopyResult copy_cloud(const geometry::PointCloud& cloud, const CopySettings& s, 
     } catch (const InputError& e) {
       plan.error = e.what();
     }
+    watch.add_to("finishing");
     out.plans.push_back(std::move(plan));
   }
-  watch.stage("paths");
   return out;
 }
 

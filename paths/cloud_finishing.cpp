@@ -297,6 +297,28 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
       const bool linked = last && path.motion.back() != Motion::rapid;
       for (std::size_t k = 0; k < segment.nodes.size(); ++k) {
         const Node& n = segment.nodes[k];
+        if (k > 0) {
+          // A move the chord test could not resolve (a wall, a step in the dropped height: no node
+          // insertion makes the straight move clear it) goes round the corner instead: up at the
+          // lower end to the highest drop along it, across, down.
+          const Node& a = segment.nodes[k - 1];
+          double highest = std::max(a.drop.tip, n.drop.tip);
+          bool straight = true;
+          const int samples = 4;
+          for (int i = 1; i < samples; ++i) {
+            const double t = static_cast<double>(i) / samples;
+            const double d = drop_assembly(bins, a.x + t * (n.x - a.x), a.y + t * (n.y - a.y), s.tool).tip;
+            highest = std::max(highest, d);
+            // Well beyond the tolerance only: a resolved move may stray by about Tu between the
+            // points the chord test looked at.
+            if (d > a.drop.tip + t * (n.drop.tip - a.drop.tip) + 4 * s.chord_tolerance) straight = false;
+          }
+          if (!straight) {
+            ++out.stepped;
+            if (highest > a.drop.tip) path.add({a.x, a.y, highest}, Motion::cut, static_cast<int>(j));
+            if (highest > n.drop.tip) path.add({n.x, n.y, highest}, Motion::cut, static_cast<int>(j));
+          }
+        }
         path.add(n.tip(), k == 0 && linked ? Motion::link : Motion::cut, static_cast<int>(j), n.drop.normal);
       }
       last = &segment.nodes.back();

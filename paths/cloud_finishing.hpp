@@ -59,6 +59,7 @@ struct CloudFinishing {
   long long inserted = 0;               // nodes the chord test added
   long long unresolved = 0;             // shortest moves still straying more than Tu (noise finer than the tolerance)
   double unresolved_worst = 0;          // by how much at most, mm
+  long long stepped = 0;                // of the moves, those taken round the corner (up, across, down) at a step no chord resolves
   long long gaps = 0;                   // inside nodes with no point under the cutter
   long long lifted = 0;                 // nodes where the shank or the holder, not the cutter, set the height
   long long below_bound = 0;            // contacts where even the smallest step exceeds the scallop bound
