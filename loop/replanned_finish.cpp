@@ -21,11 +21,14 @@ ReplanSettings::ReplanSettings() {
 
 std::vector<Eigen::Vector3d> upward_surface_cloud(const online::FinalShape& shape, const Eigen::Matrix3Xd& displacement, double spacing, double min_up, long long* faces) {
   if (displacement.cols() != shape.nodes.cols()) throw std::invalid_argument("upward_surface_cloud: one displacement per node");
-  const int m = shape.face_nodes;
-  if (m != 3 && m != 4) throw std::invalid_argument("upward_surface_cloud: faces of 3 or 4 nodes");
+  // Quadratic faces (8-node quads, 6-node triangles) list their corners first: the corners span the
+  // face (its mid-side nodes' displacement is left to the bilinear/linear interpolation).
+  const int stride = shape.face_nodes;
+  const int m = stride >= 8 ? 4 : stride == 6 ? 3 : stride;
+  if (m != 3 && m != 4) throw std::invalid_argument("upward_surface_cloud: faces of 3, 4, 6 or 8 nodes");
   std::vector<Eigen::Vector3d> cloud;
   long long count = 0;
-  for (std::size_t f = 0; f + static_cast<std::size_t>(m) <= shape.faces.size(); f += static_cast<std::size_t>(m)) {
+  for (std::size_t f = 0; f + static_cast<std::size_t>(stride) <= shape.faces.size(); f += static_cast<std::size_t>(stride)) {
     Eigen::Vector3d x[4], u[4];
     for (int k = 0; k < m; ++k) {
       const int node = shape.faces[f + static_cast<std::size_t>(k)];

@@ -34,7 +34,7 @@ struct ReplannedFinish {
 ReplannedFinish replan_finish(const online::FinalShape& shape, const Eigen::Matrix3Xd& truth, const ReplanSettings& settings = {});
 
 // The final part's upward faces moved by `displacement`, sampled about every `spacing` mm (bilinear
-// in each quad, linear in each triangle).
+// in each quad, linear in each triangle, from the corners of quadratic faces).
 std::vector<Eigen::Vector3d> upward_surface_cloud(const online::FinalShape& shape, const Eigen::Matrix3Xd& displacement, double spacing, double min_up, long long* faces = nullptr);
 
 }  // namespace drom::loop

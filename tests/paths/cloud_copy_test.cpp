@@ -15,7 +15,7 @@ namespace {
 
 using namespace drom::paths;
 
-TEST(CloudCopy, FemurHeadOnANeckIsCoveredByFewPacketsWithNoCollision) {
+TEST(CloudCopy, FemurHeadOnANeckIsCoveredByFewPacketsAndRoughedWithNoCollision) {
   const auto part = drom::tests::femur_head(20, 9, 45, 1.0);
   drom::geometry::PointCloud cloud;
   cloud.origin = "femur head";
