@@ -59,24 +59,16 @@ double swept_distance(const Eigen::Vector3d& x, const Move& m, double disk_radiu
 
 }  // namespace
 
-ScallopCheck check_scallop(const geometry::NurbsSurface& surface, const std::vector<ZoneMachining>& zones, const Tool& tool, double u0, double u1, double v0,
-                           double v1, int count_u, int count_v, double window) {
+std::vector<double> envelope_heights(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals, const std::vector<ToolMove>& tool_moves,
+                                     const Tool& tool, double window) {
   const double disk = tool.kind == ToolKind::ball ? 0.0 : tool.radius - tool.corner_radius;
   const double tube = tool.kind == ToolKind::ball ? tool.radius : tool.corner_radius;
-  // Tool moves in the part's frame, and a hash grid over them.
+  // The moves of the tube's centre disk, and a hash grid over them.
   std::vector<Move> moves;
-  Eigen::Vector3d side = Eigen::Vector3d::Zero();
-  for (const auto& z : zones) {
-    const Eigen::Vector3d axis = z.setup.axis();
-    for (const auto& p : z.passes) {
-      for (std::size_t i = 0; i + 1 < p.cc.size(); ++i)
-        moves.push_back({cutter_location(p.cc[i], p.normals[i], tool, axis) + tube * axis, cutter_location(p.cc[i + 1], p.normals[i + 1], tool, axis) + tube * axis, axis});
-      for (const auto& n : p.normals) side += n;
-    }
-  }
-  ScallopCheck out;
-  out.heights.assign(static_cast<std::size_t>(count_u * count_v), std::numeric_limits<double>::quiet_NaN());
-  if (moves.empty()) return out;
+  moves.reserve(tool_moves.size());
+  for (const auto& m : tool_moves) moves.push_back({m.tip0 + tube * m.axis, m.tip1 + tube * m.axis, m.axis});
+  std::vector<double> heights(points.size(), std::numeric_limits<double>::quiet_NaN());
+  if (moves.empty()) return heights;
   const double cell = std::max(1.0, tool.radius);
   const auto key = [&](const Eigen::Vector3d& p) {
     const auto f = [&](double x) { return static_cast<std::int64_t>(std::floor(x / cell)) & 0x1fffff; };
@@ -91,42 +83,71 @@ ScallopCheck check_scallop(const geometry::NurbsSurface& surface, const std::vec
       for (double y = std::floor(lo.y() / cell) * cell; y <= hi.y(); y += cell)
         for (double z = std::floor(lo.z() / cell) * cell; z <= hi.z(); z += cell) grid[key(Eigen::Vector3d(x + 0.5 * cell, y + 0.5 * cell, z + 0.5 * cell))].push_back(k);
   }
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& q = points[i];
+    const Eigen::Vector3d& n = normals[i];
+    const auto found = grid.find(key(q));
+    if (found == grid.end()) continue;
+    double entry = std::numeric_limits<double>::infinity();
+    for (const int k : found->second) {
+      const Move& m = moves[static_cast<std::size_t>(k)];
+      const auto f = [&](double t) { return swept_distance(q + t * n, m, disk) - tube; };
+      if (f(0) > window) continue;  // the distance changes at most as fast as t
+      const double lo = -window;
+      if (f(lo) <= 0) {
+        entry = std::min(entry, lo);
+        continue;
+      }
+      double at = 0;
+      if (convex_minimum(f, lo, std::min(window, entry), &at, 40) > 0) continue;
+      double a0 = lo, a1 = at;  // f(a0) > 0 >= f(a1)
+      for (int it = 0; it < 36; ++it) {
+        const double mid = 0.5 * (a0 + a1);
+        (f(mid) > 0 ? a0 : a1) = mid;
+      }
+      entry = std::min(entry, a1);
+    }
+    if (std::isfinite(entry)) heights[i] = entry;
+  }
+  return heights;
+}
+
+ScallopCheck check_scallop(const geometry::NurbsSurface& surface, const std::vector<ZoneMachining>& zones, const Tool& tool, double u0, double u1, double v0,
+                           double v1, int count_u, int count_v, double window) {
+  // Tool moves in the part's frame.
+  std::vector<ToolMove> moves;
+  Eigen::Vector3d side = Eigen::Vector3d::Zero();
+  for (const auto& z : zones) {
+    const Eigen::Vector3d axis = z.setup.axis();
+    for (const auto& p : z.passes) {
+      for (std::size_t i = 0; i + 1 < p.cc.size(); ++i)
+        moves.push_back({cutter_location(p.cc[i], p.normals[i], tool, axis), cutter_location(p.cc[i + 1], p.normals[i + 1], tool, axis), axis});
+      for (const auto& n : p.normals) side += n;
+    }
+  }
+  std::vector<Eigen::Vector3d> points, normals;
+  std::vector<Eigen::Vector2d> uv;
   for (int a = 0; a < count_u; ++a)
     for (int b = 0; b < count_v; ++b) {
       const double u = count_u > 1 ? u0 + (u1 - u0) * a / (count_u - 1) : u0, v = count_v > 1 ? v0 + (v1 - v0) * b / (count_v - 1) : v0;
       const auto g = geometry::local_geometry(surface.derivatives(surface.u_min() + u * (surface.u_max() - surface.u_min()),
                                                                    surface.v_min() + v * (surface.v_max() - surface.v_min())));
-      const Eigen::Vector3d q = g.point, n = g.normal.dot(side) < 0 ? Eigen::Vector3d(-g.normal) : g.normal;
-      const auto found = grid.find(key(q));
-      if (found == grid.end()) continue;
-      double entry = std::numeric_limits<double>::infinity();
-      for (const int k : found->second) {
-        const Move& m = moves[static_cast<std::size_t>(k)];
-        const auto f = [&](double t) { return swept_distance(q + t * n, m, disk) - tube; };
-        if (f(0) > window) continue;  // the distance changes at most as fast as t
-        const double lo = -window;
-        if (f(lo) <= 0) {
-          entry = std::min(entry, lo);
-          continue;
-        }
-        double at = 0;
-        if (convex_minimum(f, lo, std::min(window, entry), &at, 40) > 0) continue;
-        double a0 = lo, a1 = at;  // f(a0) > 0 >= f(a1)
-        for (int it = 0; it < 36; ++it) {
-          const double mid = 0.5 * (a0 + a1);
-          (f(mid) > 0 ? a0 : a1) = mid;
-        }
-        entry = std::min(entry, a1);
-      }
-      if (!std::isfinite(entry)) continue;
-      out.heights[static_cast<std::size_t>(a * count_v + b)] = entry;
-      ++out.points;
-      if (entry > out.max_height) {
-        out.max_height = entry;
-        out.worst_uv = Eigen::Vector2d(u, v);
-      }
-      out.max_gouge = std::max(out.max_gouge, -entry);
+      points.push_back(g.point);
+      normals.push_back(g.normal.dot(side) < 0 ? Eigen::Vector3d(-g.normal) : g.normal);
+      uv.emplace_back(u, v);
     }
+  ScallopCheck out;
+  out.heights = envelope_heights(points, normals, moves, tool, window);
+  for (std::size_t i = 0; i < out.heights.size(); ++i) {
+    const double entry = out.heights[i];
+    if (!std::isfinite(entry)) continue;
+    ++out.points;
+    if (entry > out.max_height) {
+      out.max_height = entry;
+      out.worst_uv = uv[i];
+    }
+    out.max_gouge = std::max(out.max_gouge, -entry);
+  }
   return out;
 }
 

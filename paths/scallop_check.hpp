@@ -23,6 +23,17 @@ struct ScallopCheck {
   std::vector<double> heights;  // per check point (row-major over the grid), NaN where no tool came within the window
 };
 
+// A straight tool move between two tool-tip positions (the tool's lowest point), its axis fixed; part frame.
+struct ToolMove {
+  Eigen::Vector3d tip0, tip1, axis;
+};
+
+// The same measure at any check points: per point, along its unit normal (out of the material), the
+// distance to the first place the swept tool reaches; NaN where no tool came within `window` mm.
+// Positive: uncut material; negative: a gouge. (Used on point clouds too: paths/cloud_finishing.hpp.)
+std::vector<double> envelope_heights(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals, const std::vector<ToolMove>& moves,
+                                     const Tool& tool, double window);
+
 // Check points on a grid of count_u x count_v over [u0, u1] x [v0, v1] (unit parameter domain);
 // the machined side is the normals' side the passes were planned on. Heights beyond `window` mm are
 // reported as NaN (no tool near: outside the finished area).

@@ -9,6 +9,7 @@ namespace drom::paths {
 std::string Tool::name() const {
   std::ostringstream s;
   if (kind == ToolKind::ball) s << "ball R" << radius;
+  else if (corner_radius == 0) s << "flat R" << radius;  // a torus without corner: a flat end mill (point clouds' roughing)
   else s << "torus R" << radius << " r" << corner_radius;
   return s.str();
 }
@@ -39,6 +40,12 @@ double curved_stepover(double scallop, double effective_radius, double curvature
   if (k * q < 1e-9) return 4 * q;
   if (k * q >= 1) return 0;
   return 4 * std::asin(k * q) / k;
+}
+
+double flat_scallop(double stepover, double effective_radius) {
+  if (std::isinf(effective_radius)) return 0;
+  if (stepover >= 2 * effective_radius) return effective_radius;  // the traces no longer meet: the tool's whole height stands
+  return effective_radius - std::sqrt(effective_radius * effective_radius - stepover * stepover / 4);
 }
 
 double level_ground_stepover(const Tool& tool, double scallop) {

@@ -32,8 +32,9 @@ double flat_stepover(double scallop, double effective_radius);
 // tool's trace (1/curvature <= R_eff + sh): the tool gouges there and no step keeps the bound.
 double curved_stepover(double scallop, double effective_radius, double curvature);
 
-// (Eq. 2.3 inverted, the scallop two traces leave `stepover` apart on flat ground, is
-// orientation_under_limits.hpp's flat_scallop(effective_radius, stepover).)
+// The scallop height two traces of radius R_eff leave `stepover` apart on flat ground (eq. 2.3 inverted); R_eff itself
+// once the step reaches 2 R_eff.
+double flat_scallop(double stepover, double effective_radius);
 
 // The widest step a torus can take on level ground: its flat bottom plus two corner traces,
 // 2 (R - r) + 2 sqrt(2 sh r - sh^2) (seed §2.2.2.1); a ball's eq. 2.3 with R. Eq. 1.5 is a

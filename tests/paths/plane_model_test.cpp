@@ -109,7 +109,7 @@ TEST(MoveTime, MachinesDoubleSGivesTheSeedsClosedForms) {
 TEST(Tool, EffectiveRadiusAndStepovers) {
   EXPECT_DOUBLE_EQ(effective_radius(kBall, 0.7, 0.3), 5);
   EXPECT_NEAR(effective_radius(kTorus, 30 * kDeg, 90 * kDeg), 2, 1e-12);  // across the slope: the corner radius
-  EXPECT_NEAR(flat_scallop(5.46, flat_stepover(0.01, 5.46)), 0.01, 1e-12);
+  EXPECT_NEAR(flat_scallop(flat_stepover(0.01, 5.46), 5.46), 0.01, 1e-12);
   // The curved step tends to eq. 2.3 on flat ground; convex ground needs less, concave allows more.
   EXPECT_NEAR(curved_stepover(0.01, 5, 1e-9), flat_stepover(0.01, 5), 1e-8);
   EXPECT_LT(curved_stepover(0.01, 5, -1.0 / 20), flat_stepover(0.01, 5));
