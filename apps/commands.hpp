@@ -48,5 +48,6 @@ int reduce_command(const CommandOptions& options);   // drom reduce
 int deviation_command(const CommandOptions& options);  // drom deviation
 int machine_command(const CommandOptions& options);    // drom machine
 int finish_command(const CommandOptions& options);     // drom finish
+int orient_command(const CommandOptions& options);     // drom orient
 
 }  // namespace drom::app
