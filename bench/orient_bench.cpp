@@ -3,14 +3,24 @@
 // the seed took 54 h 48 min direct and 59-75 min with voxels (MATLAB, Xeon E5-1620 3.6 GHz, Tables 3.2
 // and 4.1). Prints one JSON object per run with the split: precompute, poses, clearance check.
 //   build/bench/orient_bench [voxel|direct] [veins] [voxel_mm]     (results: docs/orientation.md)
+//   build/bench/orient_bench CASE.toml OUT [key=value ...]          (one case, timed, with drom orient's files)
 #include "paths/orient_run.hpp"
 
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 int main(int argc, char** argv) {
+  if (argc > 2 && std::string(argv[1]).ends_with(".toml")) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const drom::paths::OrientCase c = drom::paths::load_orient_case(argv[1], std::vector<std::string>(argv + 3, argv + argc));
+    const auto result = drom::paths::run_orient(c, {argv[2], false, true});
+    std::printf("{\"case\": \"%s\", \"total_s\": %.2f, \"timing_s\": %s}\n", argv[1],
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), result.summary["timing_s"].dump().c_str());
+    return 0;
+  }
   const std::string field = argc > 1 ? argv[1] : "voxel";
   const std::string veins = argc > 2 ? argv[2] : "-1";
   const std::string voxel = argc > 3 ? argv[3] : "1.0";

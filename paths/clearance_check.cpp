@@ -118,8 +118,8 @@ ClearanceChecker::ClearanceChecker(const OrientScene& scene, const ClearanceSett
   }
   const double R = tool.cutter.radius;
   cutter_reach_ = std::hypot(R, tool.flute_length - tool.pivot_height()) + tool.pivot_height();
-  part_samples_ = ObstacleCloud({}, {}, cutter_reach_);
-  for (const auto& p : scene.part_surfaces) part_samples_.append(ObstacleCloud::from_patch(p.surface, settings.gouge_spacing, p.flip, cutter_reach_));
+  part_samples_ = ObstacleCloud({}, {}, cutter_reach_ / 2);
+  for (const auto& p : scene.part_surfaces) part_samples_.append(ObstacleCloud::from_patch(p.surface, settings.gouge_spacing, p.flip, cutter_reach_ / 2));
 }
 
 ClearanceChecker::~ClearanceChecker() = default;
@@ -146,7 +146,7 @@ PoseCheck ClearanceChecker::check(const Eigen::Vector3d& cl, const Eigen::Vector
   frame.col(0) = axis.unitOrthogonal();
   frame.col(1) = axis.cross(frame.col(0));
   const double reach2 = cutter_reach_ * cutter_reach_;
-  part_samples_.for_each_near(cl, [&](int i) {
+  part_samples_.for_each_within(cl, cutter_reach_, [&](int i) {
     const Eigen::Vector3d d = part_samples_.points()[static_cast<std::size_t>(i)] - cl;
     if (d.squaredNorm() > reach2) return;
     const double sd = cutter_signed_distance(tool, frame.transpose() * d);

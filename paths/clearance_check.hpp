@@ -42,7 +42,7 @@ struct ClearanceSettings {
   double voxel = 0.5;          // mm, the distance grid's voxel
   double axial_step = 0.5;     // mm between the covering spheres' centres
   double required = 0.0;       // mm: clearance below this is a violation (0: contact)
-  double gouge_spacing = 0.25; // mm between part-surface samples for the gouge check
+  double gouge_spacing = 0.5;  // mm between part-surface samples for the gouge check
   double gouge_tolerance = 0.005;  // mm of depth tolerated (the sampling's chord)
 };
 

@@ -74,6 +74,24 @@ class ObstacleCloud {
           for (int k = start_[c]; k < start_[c + 1]; ++k) visit(order_[k]);
         }
   }
+  // Calls visit(index) for each obstacle in the cells that overlap the ball of `radius` around p (any
+  // radius: the cells visited grow with it).
+  template <class Visit>
+  void for_each_within(const Eigen::Vector3d& p, double radius, Visit&& visit) const {
+    if (points_.empty()) return;
+    const Eigen::Vector3d lo = (p - origin_).array() / cell_ - radius / cell_, hi = (p - origin_).array() / cell_ + radius / cell_;
+    int a[3], b[3];
+    for (int d = 0; d < 3; ++d) {
+      a[d] = std::max(static_cast<int>(std::floor(lo(d))), 0);
+      b[d] = std::min(static_cast<int>(std::floor(hi(d))), dims_[d] - 1);
+    }
+    for (int x = a[0]; x <= b[0]; ++x)
+      for (int y = a[1]; y <= b[1]; ++y)
+        for (int z = a[2]; z <= b[2]; ++z) {
+          const std::size_t c = (static_cast<std::size_t>(x) * dims_[1] + y) * dims_[2] + z;
+          for (int k = start_[c]; k < start_[c + 1]; ++k) visit(order_[k]);
+        }
+  }
   // The nearest obstacle within `radius` (≤ cell), or -1.
   int nearest(const Eigen::Vector3d& p, double radius) const;
 

@@ -32,6 +32,7 @@ AxisHistory bump_run(double spacing, Aggregation aggregation) {
 
 TEST(OrientBump, TiltGrowsWithMeshDensityUnderF1) {
   const double coarse = max_tilt_deg(bump_run(3, Aggregation::F1)), fine = max_tilt_deg(bump_run(1, Aggregation::F1));
+  std::cout << "F1: " << coarse << " deg (3 mm), " << fine << " deg (1 mm)\n";
   EXPECT_NEAR(coarse, 8, 2) << "seed: about 8 deg with a 3 mm mesh";
   EXPECT_NEAR(fine, 15, 4) << "seed: about 15 deg with a 1 mm mesh";
 }
@@ -39,6 +40,7 @@ TEST(OrientBump, TiltGrowsWithMeshDensityUnderF1) {
 TEST(OrientBump, F2AndF3DoNotDependOnMeshDensity) {
   for (Aggregation a : {Aggregation::F2, Aggregation::F3}) {
     const double coarse = max_tilt_deg(bump_run(3, a)), fine = max_tilt_deg(bump_run(1, a));
+    std::cout << aggregation_name(a) << ": " << coarse << " deg (3 mm), " << fine << " deg (1 mm)\n";
     EXPECT_GT(coarse, 0.5) << aggregation_name(a);
     EXPECT_NEAR(fine / coarse, 1, 0.25) << aggregation_name(a) << ": " << coarse << " deg (3 mm) vs " << fine << " deg (1 mm)";
     EXPECT_LT(fine, 4 * 15) << aggregation_name(a) << ": the same order as F1";
@@ -76,6 +78,8 @@ CornerRun corner_run(double stick_out) {
 
 TEST(OrientCorner, LongerToolTiltsLessAndReturnsWithoutOvershoot) {
   const CornerRun short_tool = corner_run(20), long_tool = corner_run(30);
+  std::cout << "corner: 20 mm tool " << short_tool.max_deviation_deg << " deg (overshoot " << short_tool.overshoot_deg << "), 30 mm tool "
+            << long_tool.max_deviation_deg << " deg (overshoot " << long_tool.overshoot_deg << ")\n";
   EXPECT_GT(short_tool.max_deviation_deg, 2.0);
   EXPECT_LT(long_tool.max_deviation_deg, 0.8 * short_tool.max_deviation_deg)
       << "20 mm: " << short_tool.max_deviation_deg << " deg, 30 mm: " << long_tool.max_deviation_deg << " deg";
