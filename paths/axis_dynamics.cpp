@@ -118,7 +118,7 @@ class AxisModel {
 
   // y = (θf, θt, θ̇f, θ̇t [, M*f, M*t]); time derivatives.
   void rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dy, MomentEvaluation* out = nullptr) const {
-    const FramedPath::Frame fr = path_.at(v0_ * t);
+    const FramedPath::Frame fr = path_.at(frozen_at_ >= 0 ? frozen_at_ : v0_ * t);
     const MomentEvaluation e = moment(fr, y(0), y(1));
     if (out) *out = e;
     Eigen::Vector2d m(e.moment.dot(fr.f), e.moment.dot(fr.t));
@@ -142,6 +142,9 @@ class AxisModel {
   const ForceField& field_;
   const DynamicsSettings& settings_;
   double v0_, mean_lever_ = 0, max_lever_ = 0;
+
+ public:
+  double frozen_at_ = -1;  // ≥ 0: the frame held at this arc length (settling the start)
 };
 
 struct ArkodeData {
@@ -233,6 +236,17 @@ AxisHistory integrate_axis(const FramedPath& path, const std::vector<Eigen::Vect
   y0(0) = first.roll_prog;
   y0(1) = first.pitch_prog;
   long evaluations = 0, steps = 0;
+  if (settings.settle_start) {
+    // The start's equilibrium: the pendulum released at s = 0 with the frame held, for 12/ω0 (a critically
+    // damped pendulum has settled to 1e-4 of its step by then), so a pass that starts near an obstacle
+    // does not start in collision.
+    model.frozen_at_ = 0;
+    const OdeRhs held = [&](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dy) { model.rhs(t, y, dy); };
+    Eigen::VectorXd settled = integrate_arkode(held, 0, y0, {12 / settings.recall.omega0()}, settings.relative_tolerance, settings.absolute_tolerance).back();
+    y0 = settled;
+    y0.segment<2>(2).setZero();
+    model.frozen_at_ = -1;
+  }
   const OdeRhs rhs = [&](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dy) {
     ++evaluations;
     model.rhs(t, y, dy);

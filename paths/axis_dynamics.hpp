@@ -87,6 +87,7 @@ struct DynamicsSettings {
   double relative_tolerance = 1e-5, absolute_tolerance = 1e-6;  // ARKODE, on θ (rad) and θ̇ (rad/s)
   double clearance_fraction = 0.25;  // no node moves more than this share of its clearance in one step
   double output_step = 0.1;      // mm between output samples
+  bool settle_start = true;      // start from the equilibrium at s = 0 (else θ = θprog, the seed's Heaviside start)
 };
 
 struct AxisSample {
@@ -106,7 +107,7 @@ struct AxisHistory {
   long rhs_evaluations = 0, steps = 0;
 };
 
-// Integrates one pass from θ = θ_prog, θ̇ = 0 (the seed's initial conditions). `nodes`: the tool's nodes,
+// Integrates one pass from the equilibrium at s = 0 (settle_start), or from θ = θ_prog, θ̇ = 0 (the seed's). `nodes`: the tool's nodes,
 // local frame (ignored by the point-G model).
 AxisHistory integrate_axis(const FramedPath& path, const std::vector<Eigen::Vector3d>& nodes, const ForceField& field,
                            const DynamicsSettings& settings);

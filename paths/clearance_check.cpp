@@ -94,7 +94,9 @@ double ObstacleDistance::distance(const Eigen::Vector3d& p) const {
     if (d < best - 1e-9 || (d < best + 1e-9 && face > best_face)) {
       best = std::min(best, d);
       best_face = face;
-      best_signed = along < 0 ? -d : d;
+      // Behind a face: negative. Beside an open edge (a blade's tip, a patch's border) the side is not
+      // defined: the unsigned distance alone then measures the overlap.
+      best_signed = along < 0 && face > 0.9 ? -d : d;
     }
   }
   return std::min(best_signed, band_);
@@ -103,7 +105,8 @@ double ObstacleDistance::distance(const Eigen::Vector3d& p) const {
 ClearanceChecker::ClearanceChecker(const OrientScene& scene, const ClearanceSettings& settings) : scene_(scene), settings_(settings) {
   const ToolBody& tool = scene.tool;
   const RevolvedProfile body = tool.body_profile();
-  const double band = body.max_radius() + std::max(settings.required, 0.0) + 2;
+  // Wide enough that any clearance under 10 mm is measured, not just bounded.
+  const double band = body.max_radius() + std::max(settings.required, 0.0) + 10;
   distance_ = std::make_unique<ObstacleDistance>(scene_check_triangles(scene, std::min(1.0, 2 * settings.voxel)), settings.voxel, band);
   // Covering spheres of the body, heights above the pivot.
   const double z0 = body.z.front(), z1 = body.z.back();

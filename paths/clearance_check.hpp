@@ -2,7 +2,8 @@
 // The proof the seed does not give: the final orientations checked against the check surfaces with
 // no mesh-node luck. The check surfaces' triangles go into an OpenVDB narrow band (meshToVolume) that
 // keeps, per voxel, its closest triangle; a query takes the triangles of the 8 voxels around it and
-// measures the exact point-triangle distance, signed by the triangle's outward material normal. The
+// measures the exact point-triangle distance, signed by the triangle's outward material normal where the
+// point lies in front of or behind a face (beside an open border the distance is unsigned). The
 // shank+holder solid is covered, slab by slab along the axis (step `axial_step`), by spheres centred on
 // the axis (radius √(ρ_max² + (Δz/2)²) for the slab's largest radius ρ_max): the clearance reported is
 // a lower bound of the true one, conservative by at most (Δz/2)² / (2ρ).

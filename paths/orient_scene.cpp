@@ -74,7 +74,7 @@ TriangleSoup scene_check_triangles(const OrientScene& scene, double step) {
 }
 
 FramedPath iso_pass(const geometry::NurbsSurface& surface, bool flip, double v, double u0, double u1, int count, double pivot_offset, double roll,
-                    double pitch) {
+                    double pitch, double lead_in) {
   std::vector<Eigen::Vector3d> cl, normals;
   for (int i = 0; i < count; ++i) {
     const double u = u0 + (u1 - u0) * i / (count - 1);
@@ -82,6 +82,15 @@ FramedPath iso_pass(const geometry::NurbsSurface& surface, bool flip, double v, 
     const Eigen::Vector3d n = flip ? Eigen::Vector3d(-g.normal) : g.normal;
     cl.push_back(g.point + pivot_offset * n);
     normals.push_back(n);
+  }
+  if (lead_in > 0) {
+    const Eigen::Vector3d back = (cl[0] - cl[1]).normalized();
+    const double step = (cl[1] - cl[0]).norm();
+    const int extra = static_cast<int>(std::ceil(lead_in / step));
+    for (int i = 1; i <= extra; ++i) {
+      cl.insert(cl.begin(), cl.front() + step * back);
+      normals.insert(normals.begin(), normals.front());
+    }
   }
   return FramedPath::from_points(cl, normals, roll, pitch);
 }
@@ -181,7 +190,7 @@ OrientScene impeller_scene(const ImpellerOptions& o) {
       (void)r;
       s.check_patches.push_back({"blade " + std::to_string(k) + (side == 0 ? " pressure" : " suction"), std::move(b), flip});
     }
-  s.tool = ball_tool(5, 15, 5, 45, 16, 40);
+  s.tool = ball_tool(5, 15, 5, 45, 12, 40);
   const int veins = o.veins < 0 ? o.blades : std::min(o.veins, o.blades);
   for (int k = 0; k < veins; ++k) {
     const geometry::NurbsSurface hub = impeller_hub_patch(o, k);
@@ -199,7 +208,7 @@ OrientScene impeller_scene(const ImpellerOptions& o) {
         prev = q;
       }
       const int count = std::max(2, static_cast<int>(std::ceil(length / o.point_spacing)) + 1);
-      s.passes.push_back(iso_pass(hub, flip, v, 0, 1, count, s.tool.pivot_height(), 0, o.lead));
+      s.passes.push_back(iso_pass(hub, flip, v, 0, 1, count, s.tool.pivot_height(), 0, o.lead, o.lead_in));
       s.pass_names.push_back("vein " + std::to_string(k) + " v = " + std::to_string(v));
     }
   }

@@ -43,8 +43,10 @@ TriangleSoup scene_check_triangles(const OrientScene& scene, double step);
 // offset S + (pivot height) n... exactly: CL = S + R n for a ball (the pivot is the ball's centre), and
 // S + r n for a torus (the corner circle's plane centre lies at (R − r) from the corner centre: a torus
 // pivot keeps the contact only where the axis follows n; the gouge check reports the rest).
+// `lead_in` (mm): a straight approach along the start's tangent before the surface, so the axis can turn
+// away from obstacles before the cut begins (the model cannot recover a pose that starts in collision).
 FramedPath iso_pass(const geometry::NurbsSurface& surface, bool flip, double v, double u0, double u1, int count, double pivot_offset, double roll,
-                    double pitch);
+                    double pitch, double lead_in = 0);
 
 struct BumpOptions {
   double lateral = 8;     // mm: the pass's distance in y from the bump's base line y = 0
@@ -61,10 +63,11 @@ OrientScene corner_scene(const CornerOptions& o);
 struct ImpellerOptions {
   int blades = 7;
   double hub_inlet_radius = 45, hub_outlet_radius = 110;  // mm
-  double hub_inlet_height = 45;                           // hub z at the inlet (0 at the outlet)
+  double hub_inlet_height = 25;                           // hub z at the inlet (0 at the outlet)
   double blade_height_inlet = 32, blade_height_outlet = 18;  // mm above the hub
-  double wrap = 0.55;        // rad of blade wrap from inlet to outlet
-  double lean = 0.35;        // rad: the blade leans over the vein (rake), rising by height·tan(lean)
+  double wrap = 0.35;        // rad of blade wrap from inlet to outlet
+  double lean = 0.2;         // rad: the blade leans over the vein (rake), rising by height·tan(lean)
+  double lead_in = 20;       // mm of approach before the inlet
   double thickness = 3;      // mm
   double v_first = 0.2, v_last = 0.8, v_step = 0.01;  // the seed's passes in each vein
   double point_spacing = 0.5;  // mm between CL points along a pass
