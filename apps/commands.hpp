@@ -54,5 +54,6 @@ int deviation_command(const CommandOptions& options);  // drom deviation
 int machine_command(const CommandOptions& options);    // drom machine
 int copy_command(const CommandOptions& options);       // drom copy
 int finish_command(const CommandOptions& options);     // drom finish
+int orient_command(const CommandOptions& options);     // drom orient
 
 }  // namespace drom::app

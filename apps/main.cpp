@@ -37,6 +37,8 @@ int main(int argc, char** argv) {
        drom::app::copy_command},
       {"finish", "finishing paths on a free-form surface in the least time under a scallop bound (zoning, tool choice, 3-axis or 3+2)",
        drom::app::finish_command},
+      {"orient", "collision-free 5-axis tool axis along fixed CL paths from repulsive fields (seed 000), proved by a clearance check and put on a machine",
+       drom::app::orient_command},
       {"mesh", "mesh the case's part and write it with its clamps to VTK", drom::app::mesh_command},
       {"check", "validate a case file and print it with every override applied", drom::app::check_command},
       {"machine", "a program (G-code or CL data) on a machine: travel, singularities, the feed it really reaches, the limiting axes, the cycle time",
