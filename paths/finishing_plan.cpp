@@ -24,31 +24,22 @@ std::vector<ZoneShape> describe_zones(const SurfaceSamples& samples, const Zones
   return shapes;
 }
 
-double FinishingPlan::pass_time() const {
-  double t = 0;
-  for (const auto& z : zones) t += z.pass_time;
-  return t;
+namespace {
+
+// One of the zones' figures summed over the plan.
+double sum_over(const std::vector<ZoneMachining>& zones, double ZoneMachining::*figure) {
+  double total = 0;
+  for (const auto& z : zones) total += z.*figure;
+  return total;
 }
-double FinishingPlan::link_time() const {
-  double t = 0;
-  for (const auto& z : zones) t += z.link_time;
-  return t;
-}
-double FinishingPlan::retract_time() const {
-  double t = 0;
-  for (const auto& z : zones) t += z.retract_time;
-  return t;
-}
-double FinishingPlan::pass_length() const {
-  double l = 0;
-  for (const auto& z : zones) l += z.pass_length;
-  return l;
-}
-double FinishingPlan::link_length() const {
-  double l = 0;
-  for (const auto& z : zones) l += z.link_length;
-  return l;
-}
+
+}  // namespace
+
+double FinishingPlan::pass_time() const { return sum_over(zones, &ZoneMachining::pass_time); }
+double FinishingPlan::link_time() const { return sum_over(zones, &ZoneMachining::link_time); }
+double FinishingPlan::retract_time() const { return sum_over(zones, &ZoneMachining::retract_time); }
+double FinishingPlan::pass_length() const { return sum_over(zones, &ZoneMachining::pass_length); }
+double FinishingPlan::link_length() const { return sum_over(zones, &ZoneMachining::link_length); }
 int FinishingPlan::pass_count() const {
   int n = 0;
   for (const auto& z : zones) n += static_cast<int>(z.passes.size());
