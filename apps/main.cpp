@@ -31,6 +31,8 @@ int main(int argc, char** argv) {
       {"removal", "compute the material each tool station removes, on the case's mesh", drom::app::removal_command},
       {"offline", "simulate the machining once per unit stress profile: the snapshot database (B1, B2)", drom::app::offline_command},
       {"truth", "simulate the machining for the case's own stress profile, with full fields", drom::app::truth_command},
+      {"merge", "assemble database.h5 from the slices that drom offline / truth --stations a:b left in --out's checkpoint folder",
+       drom::app::merge_command},
       {"reduce", "compress an offline database into the light model the online predictor loads", drom::app::reduce_command},
       {"deviation", "learn an unknown blank's deviation from laser profiles during the approach (seed chapter 2)", drom::app::deviation_command},
       {"mesh", "mesh the case's part and write it with its clamps to VTK", drom::app::mesh_command},
@@ -85,6 +87,13 @@ int main(int argc, char** argv) {
       cmd->add_option("--threads", options.threads, "worker threads (default: one per hardware thread)")->check(CLI::PositiveNumber);
       cmd->add_option("--frames", options.frames, "full-field VTK frames over the stations (default: 10 for truth, 0 for offline)")
           ->check(CLI::NonNegativeNumber);
+      cmd->add_option("--stations", options.stations,
+                      "only stations a to b - 1 (a:b, a: or :b), into --out's checkpoint folder; drom merge writes the database once all are there");
+    }
+    if (std::string(sub.name) == "merge") {
+      cmd->add_option("--kind", options.merge_kind, "the slices of drom offline or of drom truth")->capture_default_str()->check(CLI::IsMember({"offline", "truth"}));
+      cmd->add_option("--threads", options.threads, "worker threads for the final shape (default: one per hardware thread)")->check(CLI::PositiveNumber);
+      cmd->add_option("--frames", options.frames, "as the slices were run with (default: 10 for truth, 0 for offline)")->check(CLI::NonNegativeNumber);
     }
     commands.emplace_back(cmd, &sub);
   }
