@@ -115,15 +115,17 @@ class MpiTeam final : public JobTeam {
         saved += r[kSaved];
       }
       if (stopping) work.cancel();
-      if (done) return;
       if (root() && static_cast<std::size_t>(saved) > reported) {
         reported = static_cast<std::size_t>(saved);
         try {
           if (!report(reported)) stop = true;
         } catch (...) {
-          work.fail(std::current_exception());  // every rank hears of it at the next round
+          // Every rank hears of it at the next round. After the last round there is none: every
+          // station is saved, and rank 0 throwing alone would leave the others waiting, so it is dropped.
+          if (!done) work.fail(std::current_exception());
         }
       }
+      if (done) return;
     }
   }
 
