@@ -47,16 +47,11 @@ std::string run(const std::string& args) {
   return r.exit_code == 0 ? "" : "exit " + std::to_string(r.exit_code) + ": " + r.output;
 }
 
-// The serial database of a job, computed once per test binary.
-const std::string& serial_database(const std::string& command) {
-  static std::map<std::string, std::string> made;
-  auto& db = made[command];
-  if (db.empty()) {
-    const auto out = dir("serial_" + command);
-    EXPECT_EQ(run(command + kPlate + " --threads 2 --out " + out.string()), "");
-    db = bytes(out / "database.h5");
-  }
-  return db;
+// The serial database of a job (in a folder of the test's own: ctest runs tests side by side).
+std::string serial_database(const std::string& command) {
+  const auto out = dir(std::string("serial_") + ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" + command);
+  EXPECT_EQ(run(command + kPlate + " --threads 2 --out " + out.string()), "");
+  return bytes(out / "database.h5");
 }
 
 std::size_t station_files(const fs::path& out) {
@@ -104,16 +99,29 @@ pid_t rank_pid(pid_t launcher, int rank) {
   return 0;
 }
 
-TEST(Distributed, TwoRanksWriteTheSerialDatabaseByteForByte) {
-  for (const std::string command : {"offline", "truth"}) {
-    const auto out = dir("two_ranks_" + command);
-    const auto r = mpirun(2, command + kPlate + " --threads 1 --out " + out.string());
-    ASSERT_EQ(r.exit_code, 0) << r.output;
-    // Rank 0 alone reports and writes: one summary line, one progress stream.
-    EXPECT_EQ(count(r.output, "-> " + out.string() + "/database.h5"), 1u) << r.output;
-    EXPECT_TRUE(bytes(out / "database.h5") == serial_database(command)) << command;
-    EXPECT_FALSE(fs::exists(out / ".checkpoint"));
-  }
+void two_ranks_write_the_serial_bytes(const std::string& command) {
+  const auto out = dir("two_ranks_" + command);
+  const auto r = mpirun(2, command + kPlate + " --threads 1 --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // Rank 0 alone reports and writes: one summary line, one progress stream.
+  EXPECT_EQ(count(r.output, "-> " + out.string() + "/database.h5"), 1u) << r.output;
+  EXPECT_EQ(count(r.output, "station 23/23"), 1u) << r.output;
+  EXPECT_TRUE(bytes(out / "database.h5") == serial_database(command)) << command;
+  EXPECT_FALSE(fs::exists(out / ".checkpoint"));
+}
+
+TEST(Distributed, TwoRanksWriteTheSerialDatabaseByteForByte) { two_ranks_write_the_serial_bytes("offline"); }
+
+// The same for drom truth, and drom run's offline-and-truth pass (slow: ctest -L slow).
+TEST(SlowDistributed, TruthAndRunOnTwoRanksWriteTheSerialDatabases) {
+  two_ranks_write_the_serial_bytes("truth");
+  const auto serial = dir("run_serial"), ranks = dir("run_ranks");
+  ASSERT_EQ(run("run" + kPlate + " --threads 2 --out " + serial.string()), "");
+  const auto r = mpirun(2, "run" + kPlate + " --quiet --threads 1 --out " + ranks.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* stage : {"offline", "truth"})
+    EXPECT_TRUE(bytes(serial / stage / "database.h5") == bytes(ranks / stage / "database.h5")) << stage;
+  EXPECT_TRUE(fs::exists(ranks / "summary.json"));
 }
 
 TEST(Distributed, KilledRankLeavesItsStationsAndTheRerunWithOtherRanksWritesTheSameBytes) {
@@ -160,23 +168,28 @@ TEST(Distributed, BadInputStopsEveryRankWithTheSameErrorAndExitCode2) {
   const auto out = dir("bad_case");
   fs::create_directories(out);
   const auto bad = out / "bad.toml";
-  std::ofstream(bad) << "[mesh]\nnx = 10\nsurprise = 3\n";
+  {
+    std::string text = bytes(fs::path(DROM_SOURCE_DIR) / "cases" / "flat_plate.toml");
+    text.replace(text.find("nz = 5"), 6, "nz = 5\nsurprise = 3");
+    std::ofstream(bad) << text;
+  }
   const auto start = std::chrono::steady_clock::now();
   const auto r = mpirun(2, "offline " + bad.string() + " --out " + out.string());
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_LT(seconds, 30.0);
-  // Both ranks say the same (the file, the line and the key), no "rank" prefix: they all failed alike.
+  // Both ranks say the same (the file and the key), no "rank" prefix: they all failed alike.
   EXPECT_EQ(count(r.output, "drom offline: error: "), 2u) << r.output;
   EXPECT_EQ(count(r.output, "surprise"), 2u) << r.output;
+  EXPECT_EQ(count(r.output, "bad.toml"), 2u) << r.output;
 
   // Input that only rank 0 sees as bad (the checkpoint of another case in --out): rank 1 stops too,
-  // with rank 0's message.
+  // and both say rank 0's message, prefixed with where it failed.
   ASSERT_EQ(run("offline" + kPlate + " --stop-after 1 --threads 1 --out " + out.string()), "");
   const auto other = mpirun(2, "offline" + kPlate + " --set stress.sigma11=[1,2,3] --resume --quiet --out " + out.string());
   EXPECT_EQ(other.exit_code, 2) << other.output;
   EXPECT_EQ(count(other.output, "different case"), 2u) << other.output;
-  EXPECT_EQ(count(other.output, "rank 0 of 2"), 1u) << other.output;  // rank 1 names where it failed
+  EXPECT_EQ(count(other.output, "rank 0 of 2"), 2u) << other.output;  // the same message names where it failed
 }
 #else
 TEST(Distributed, WithoutMpiDromRefusesToRunAsOneOfSeveralRanks) {

@@ -38,7 +38,11 @@ TEST(StationSchedule, BlocksAreContiguousAndTheLargestIsAsSmallAsItCanBe) {
     double largest = 0;
     for (const auto& block : blocks) {
       double load = 0;
-      for (const auto& t : block) EXPECT_EQ(t.first, next), next = t.last, load += t.cost;
+      for (const auto& t : block) {
+        EXPECT_EQ(t.first, next);
+        next = t.last;
+        load += t.cost;
+      }
       largest = std::max(largest, load);
     }
     EXPECT_EQ(next, 40u);
