@@ -25,7 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 
 // The coarse flat plate of tests/offline/offline_job_test.cpp (100 mm elements, 1 mm voxels), with a
-// station every 900 mm of cut (23 stations) to keep the suite short.
+// station every 900 mm of cut (33 stations) to keep the suite short.
 const std::string kPlate =
     " --set mesh.nx=10 --set mesh.ny=10 --set path.station_spacing=900 --set removal.voxel_size=1.0"
     " --set clamps.0.box=[0,100,0,100] --set clamps.1.box=[900,1000,0,100] --set clamps.2.box=[0,100,900,1000] --set clamps.3.box=[900,1000,900,1000]";
@@ -105,7 +105,7 @@ void two_ranks_write_the_serial_bytes(const std::string& command) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   // Rank 0 alone reports and writes: one summary line, one progress stream.
   EXPECT_EQ(count(r.output, "-> " + out.string() + "/database.h5"), 1u) << r.output;
-  EXPECT_EQ(count(r.output, "station 23/23"), 1u) << r.output;
+  EXPECT_EQ(count(r.output, "station 33/33"), 1u) << r.output;
   EXPECT_TRUE(bytes(out / "database.h5") == serial_database(command)) << command;
   EXPECT_FALSE(fs::exists(out / ".checkpoint"));
 }
