@@ -13,8 +13,8 @@ namespace drom::offline {
 
 namespace {
 
-// A station's solve time grows as the live elements to this power (docs/distributed.md: fitted on
-// the per-station times of the curved panel and the flat plate).
+// A station's solve time taken to grow as the live elements to this power: a sparse Cholesky of a
+// plate-like mesh costs n^1.5 under nested dissection (docs/distributed.md; a law, not a fit).
 constexpr double kCostExponent = 1.5;
 
 bool parse_index(std::string_view text, std::size_t& value) {

@@ -2,8 +2,7 @@
 // Which stations a job (or a slice of it) solves, and how they are dealt out to the ranks: contiguous
 // blocks of whole chunks (a chunk is solved in order from a cold start: StationSolvers::chunk), with
 // the largest block's estimated cost as small as it can be. A station's cost is estimated from the
-// material left at it, by a law measured on this machine (docs/distributed.md): late stations have
-// less material and cost less.
+// material left at it (docs/distributed.md): late stations have less material and cost less.
 #include "offline/activity_history.hpp"
 
 #include <cstddef>
