@@ -25,6 +25,7 @@ struct RunOptions {
   std::filesystem::path out = "out";  // offline/, truth/ and model/ are kept here and reused
   bool quiet = false;                 // no progress on stderr
   int threads = 0;                    // the offline job's workers; 0: one per hardware thread
+  bool replan = false;                // re-plan a finishing pass on the predicted final shape (loop/replanned_finish.hpp)
   // The ranks of an MPI job (mpirun -np N drom run): they share the offline-and-truth pass, then rank 0
   // alone goes on. Null: this process alone.
   offline::JobTeam* team = nullptr;
