@@ -23,9 +23,11 @@
 #include "support/toml_reader.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <fstream>
@@ -44,7 +46,7 @@ namespace {
 // Per-station results on disk (OUT/.checkpoint), so an interrupted run loses no finished station,
 // the ranks of an MPI job share their work, and slices computed apart are merged:
 //   manifest.txt             the job's identity (mode and case hash)
-//   station_NNNNN.bin, final.bin   the job's key, then one matrix (ByteWriter)
+//   station_NNNNN.bin, final.bin   the job's key, the seconds its solve took, then one matrix (ByteWriter)
 //   slices/slice_A_B.json    what each --stations A:B run was, where, and whether it finished
 // The folder must be one every rank (and every slice) sees.
 class Checkpoint {
@@ -73,11 +75,23 @@ class Checkpoint {
   }
   std::filesystem::path file(const std::string& name) const { return dir_ / (name + ".bin"); }
   bool has(const std::string& name) const { return std::filesystem::exists(file(name)); }
-  void save(const std::string& name, const Eigen::MatrixXd& m) const {
+  void save(const std::string& name, const Eigen::MatrixXd& m, double seconds) const {
     ByteWriter w;
     w.put(key_);
+    w.put(seconds);
     w.put(m);
     write_file_atomically(file(name), w.bytes());
+  }
+  // The seconds a saved file's solve took (its header only: the schedule reads it for every station);
+  // 0 when the file is missing or not this job's.
+  double seconds(const std::string& name) const {
+    std::ifstream in(file(name), std::ios::binary);
+    std::array<char, sizeof key_ + sizeof(double)> header{};
+    if (!in.read(header.data(), header.size())) return 0;
+    ByteReader r(std::string_view(header.data(), header.size()), file(name).string());
+    if (r.get<std::uint64_t>() != key_) return 0;
+    const double s = r.get<double>();
+    return std::isfinite(s) && s > 0 ? s : 0;
   }
   // Throws InputError naming the file (and the slice that should have written it) when it is not
   // this job's.
@@ -87,6 +101,7 @@ class Checkpoint {
     ByteReader r(bytes, file(name).string());
     if (bytes.size() < sizeof key_ || r.get<std::uint64_t>() != key_)
       throw InputError(file(name).string() + ": written by another job" + slice_holding(station) + ", not this one's; remove it and rerun its stations");
+    r.get<double>();  // the seconds its solve took: the schedule's, not the database's
     Eigen::MatrixXd m = r.matrix();
     if (!r.done()) throw InputError(file(name).string() + ": malformed checkpoint" + slice_holding(station));
     return m;
@@ -444,15 +459,21 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
     return std::all_of(outputs.begin(), outputs.end(), [&](const Output& o) { return o.checkpoint->has(name); });
   };
   // 3. The stations still missing, dealt out by rank 0 in contiguous blocks of chunks (a warm-starting
-  //    solver's chunk is solved in order from its first station), balanced by their estimated cost.
+  //    solver's chunk is solved in order from its first station), balanced by their estimated cost:
+  //    the cost law calibrated on the solve times the stations already saved measured.
   std::size_t done_before = 0;
+  std::size_t measured_stations = 0;
   std::vector<std::size_t> missing;  // rank 0's view, for merge's refusal
   const std::string dealt = on_root_then_broadcast(team, [&] {
+    std::vector<double> measured(ns, 0.0);
     for (std::size_t k = 0; k < ns; ++k) {
-      if (saved_by_all(station_name(k)))
+      if (saved_by_all(station_name(k))) {
         ++done_before;
-      else
+        measured[k] = outputs.front().checkpoint->seconds(station_name(k));
+        measured_stations += measured[k] > 0;
+      } else {
         missing.push_back(k);
+      }
     }
     if (options.merge && !missing.empty()) {
       std::string list;
@@ -470,7 +491,7 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
                        " stations are missing, stations " + list + " (a:b is stations a to b - 1); run them with --stations a:b, then merge again");
     }
     const auto tasks = chunk_tasks(ns, solvers->chunk(), [&](std::size_t k) { return range.contains(k) && !saved_by_all(station_name(k)); },
-                                   station_costs(history));
+                                   calibrated_costs(station_costs(history), measured));
     const auto blocks = deal_blocks(tasks, team.size(), 0);
     ByteWriter w;
     w.put<std::uint64_t>(done_before);
@@ -550,7 +571,9 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
             stopped = true;
             break;
           }
+          const auto solve_start = std::chrono::steady_clock::now();
           const Eigen::MatrixXd U = solver->solve(activity, k > task.first);
+          const double solve_seconds = seconds_since(solve_start);
           if (saved) continue;
           for (const auto& o : outputs) {
             if (o.checkpoint->has(station_name(k))) continue;
@@ -559,7 +582,7 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
             for (std::size_t i = 0; i < top.size(); ++i)
               W.row(static_cast<Eigen::Index>(target.size() + i)) = U.row(3 * top[i] + 2).segment(o.first, o.count());
             if (frame_at(k, ns, o.frames)) solver->write_vtu(o.options.out / "frames" / (station_name(k) + ".vtu"), names(o, U), static_cast<std::size_t>(o.first));
-            o.checkpoint->save(station_name(k), W);
+            o.checkpoint->save(station_name(k), W, solve_seconds);
           }
           const std::size_t saved_here = work.saved_one();
           if (team.reports_per_station()) {
@@ -619,12 +642,14 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
     const std::vector<double> final_activity = history.at(ns - 1);
     if (!saved_by_all("final")) {
       const auto solver = solvers->make_worker();
+      const auto solve_start = std::chrono::steady_clock::now();
       const Eigen::MatrixXd U = solver->free_shape(final_activity);
+      const double solve_seconds = seconds_since(solve_start);
       accumulate(solver_statistics, {{"final_shape", solver->statistics()}});
       for (const auto& o : outputs) {
         if (o.checkpoint->has("final")) continue;
         solver->write_vtu(o.options.out / "final_free_shape.vtu", names(o, U), static_cast<std::size_t>(o.first));
-        o.checkpoint->save("final", U.middleCols(o.first, o.count()));
+        o.checkpoint->save("final", U.middleCols(o.first, o.count()), solve_seconds);
       }
     }
     for (auto& o : outputs)
@@ -635,6 +660,7 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
                                     {"solver_statistics", solver_statistics},
                                     {"equilibrium", solvers->equilibrium_statistics()},
                                     {"equilibrium_time_s", equilibrium_seconds},
+                                    {"deal_measured_stations", measured_stations},
                                     {"pass_outputs", modes}}));
     return nlohmann::json{{"saved", finished}, {"summaries", all}}.dump();
   });

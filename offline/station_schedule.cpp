@@ -49,6 +49,32 @@ std::vector<double> station_costs(const ActivityHistory& history) {
   return costs;
 }
 
+std::vector<double> calibrated_costs(const std::vector<double>& law, const std::vector<double>& measured_seconds) {
+  if (measured_seconds.size() != law.size()) throw std::invalid_argument("calibrated_costs: one measured time (or 0) per station");
+  std::vector<std::size_t> known;  // measured stations whose law gives a ratio
+  for (std::size_t k = 0; k < law.size(); ++k)
+    if (measured_seconds[k] > 0 && law[k] > 0) known.push_back(k);
+  if (known.empty()) return law;
+  auto ratio = [&](std::size_t k) { return measured_seconds[k] / law[k]; };
+  std::vector<double> costs(law.size());
+  std::size_t next = 0;  // the first known station at or after k
+  for (std::size_t k = 0; k < law.size(); ++k) {
+    while (next < known.size() && known[next] < k) ++next;
+    if (measured_seconds[k] > 0) {
+      costs[k] = measured_seconds[k];
+    } else if (next == 0) {
+      costs[k] = law[k] * ratio(known.front());
+    } else if (next == known.size()) {
+      costs[k] = law[k] * ratio(known.back());
+    } else {
+      const std::size_t before = known[next - 1], after = known[next];
+      const double t = static_cast<double>(k - before) / static_cast<double>(after - before);
+      costs[k] = law[k] * ((1 - t) * ratio(before) + t * ratio(after));
+    }
+  }
+  return costs;
+}
+
 std::vector<ChunkTask> chunk_tasks(std::size_t stations, std::size_t chunk, const std::function<bool(std::size_t)>& wanted,
                                    const std::vector<double>& costs) {
   std::vector<ChunkTask> tasks;

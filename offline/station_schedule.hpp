@@ -2,7 +2,8 @@
 // Which stations a job (or a slice of it) solves, and how they are dealt out to the ranks: contiguous
 // blocks of whole chunks (a chunk is solved in order from a cold start: StationSolvers::chunk), with
 // the largest block's estimated cost as small as it can be. A station's cost is estimated from the
-// material left at it (docs/distributed.md): late stations have less material and cost less.
+// material left at it (docs/distributed.md): late stations have less material and cost less; where
+// stations were solved before, their measured times calibrate the estimate.
 #include "offline/activity_history.hpp"
 
 #include <cstddef>
@@ -33,8 +34,14 @@ struct ChunkTask {
   double cost = 0;
 };
 
-// The estimated cost of each station, relative (the unit is the intact stock's station).
+// The estimated cost of each station by the cost law, relative (the unit is the intact stock's station).
 std::vector<double> station_costs(const ActivityHistory& history);
+
+// The law's costs calibrated on measured solve times (seconds; 0: not measured), which the stations a
+// killed run, a resumed run or other slices saved carry: a measured station costs its time; another
+// costs the law times the measured-to-law ratio of the nearest measured stations on either side
+// (linear in the station's index between them, the nearer one's beyond them). Nothing measured: the law.
+std::vector<double> calibrated_costs(const std::vector<double>& law, const std::vector<double>& measured_seconds);
 
 // The chunks of `chunk` stations, out of all the history's stations, that hold a station `wanted`
 // says is missing; each ends after its last missing station.

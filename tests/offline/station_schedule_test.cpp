@@ -69,6 +69,48 @@ TEST(StationSchedule, BlocksAreContiguousAndTheLargestIsAsSmallAsItCanBe) {
   EXPECT_LT(two[0].size(), two[1].size());
 }
 
+TEST(StationSchedule, MeasuredTimesCalibrateTheLawBetweenAndBeyondThem) {
+  const std::vector<double> law = {1.0, 0.8, 0.6, 0.5, 0.4, 0.2};
+  // Nothing measured: the law.
+  EXPECT_EQ(calibrated_costs(law, std::vector<double>(6, 0.0)), law);
+  // Stations 1 and 4 measured at 2 and 6 s (ratios 2.5 and 15): station 0 takes 1's ratio, 5 takes
+  // 4's, 2 and 3 the ratios a third and two thirds of the way; measured stations cost their time.
+  const auto costs = calibrated_costs(law, {0, 2.0, 0, 0, 6.0, 0});
+  EXPECT_DOUBLE_EQ(costs[0], 1.0 * 2.5);
+  EXPECT_DOUBLE_EQ(costs[1], 2.0);
+  EXPECT_DOUBLE_EQ(costs[2], 0.6 * (2.5 + (15 - 2.5) / 3));
+  EXPECT_DOUBLE_EQ(costs[3], 0.5 * (2.5 + 2 * (15 - 2.5) / 3));
+  EXPECT_DOUBLE_EQ(costs[4], 6.0);
+  EXPECT_DOUBLE_EQ(costs[5], 0.2 * 15);
+  EXPECT_THROW(calibrated_costs(law, {1.0}), std::invalid_argument);
+}
+
+TEST(StationSchedule, MeasuredCostsOverruleTheLawInTheDeal) {
+  // The law says late stations are cheaper. A resumed run holds stations 0..9, measured as the law
+  // says (1 s for the first), and 30..39, measured 6 times slower than the law (their clamps made the
+  // solves harder, say); 10..29 are missing. Calibrated, their costs rise along the job, so two ranks
+  // split them with more stations on the first rank, where the law alone would put fewer.
+  std::vector<double> law(40), measured(40, 0.0);
+  for (std::size_t k = 0; k < 40; ++k) law[k] = 1.0 - 0.9 * static_cast<double>(k) / 39.0;
+  for (std::size_t k = 0; k < 10; ++k) measured[k] = law[k];
+  for (std::size_t k = 30; k < 40; ++k) measured[k] = 6 * law[k];
+  auto missing = [](std::size_t k) { return k >= 10 && k < 30; };
+  const auto costs = calibrated_costs(law, measured);
+  const auto blocks = deal_blocks(chunk_tasks(40, 1, missing, costs), 2, 0);
+  const auto by_law = deal_blocks(chunk_tasks(40, 1, missing, law), 2, 0);
+  // Brute force over the split of the 20 missing stations, with the calibrated costs.
+  double best = 1e300;
+  std::size_t best_split = 0;
+  for (std::size_t a = 10; a <= 30; ++a) {
+    const double largest = std::max(std::accumulate(costs.begin() + 10, costs.begin() + static_cast<long>(a), 0.0),
+                                    std::accumulate(costs.begin() + static_cast<long>(a), costs.begin() + 30, 0.0));
+    if (largest < best) best = largest, best_split = a;
+  }
+  EXPECT_EQ(blocks[0].size(), best_split - 10);
+  EXPECT_GT(blocks[0].size(), blocks[1].size());
+  EXPECT_LT(by_law[0].size(), by_law[1].size());
+}
+
 TEST(StationSchedule, ChunksRestartColdAtTheirFirstStationAndEndAtTheirLastMissingOne) {
   const std::vector<double> costs(40, 1.0);
   // Stations 0..20 saved: chunk 16..31 is solved from 16 (cold), to its last missing station.
