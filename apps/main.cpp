@@ -94,8 +94,11 @@ int main(int argc, char** argv) {
       cmd->add_option("--param", options.study_parameter, "the parameter: noise, angle, refresh, calibration, desync, amplitude or seed (the noise draw)")->required();
       cmd->add_option("--values", options.study_values, "its values, e.g. --values 0,0.02,0.05")->required()->delimiter(',');
     }
-    if (std::string(sub.name) == "run")
+    if (std::string(sub.name) == "run") {
       cmd->add_flag("--replan", options.replan, "re-plan a finishing pass on the predicted final shape, sampled as a cloud, and report its distance to the truth");
+      cmd->add_option("--threads", options.threads, "the offline-and-truth pass's worker threads, per rank (default: one per hardware thread)")
+          ->check(CLI::PositiveNumber);
+    }
     if (std::string(sub.name) == "finish")
       cmd->add_option("--threads", options.threads, "K values optimised at once (default: one per hardware thread)")->check(CLI::PositiveNumber);
     if (std::string(sub.name) == "offline" || std::string(sub.name) == "truth") {
