@@ -6,7 +6,20 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cstdio>
 #include <iostream>
+#include <string>
+
+namespace {
+
+// A message in one write: under mpirun every rank may say it at once, and the launcher forwards
+// each write whole (piecewise writes came out interleaved).
+void say_once(const std::string& message) {
+  std::fflush(stdout);
+  std::fwrite(message.data(), 1, message.size(), stderr);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   // First, before any thread has an arena of its own: the station solves' large blocks are kept and
@@ -137,10 +150,10 @@ int main(int argc, char** argv) {
     try {
       return sub->run(options);
     } catch (const drom::InputError& e) {
-      std::cerr << "drom " << sub->name << ": error: " << e.what() << "\n";
+      say_once(std::string("drom ") + sub->name + ": error: " + e.what() + "\n");
       return 2;
     } catch (const std::exception& e) {
-      std::cerr << "drom " << sub->name << ": failed: " << e.what() << "\n";
+      say_once(std::string("drom ") + sub->name + ": failed: " + e.what() + "\n");
       return 1;
     }
   }

@@ -227,6 +227,7 @@ TEST(Distributed, BadInputStopsEveryRankWithTheSameErrorAndExitCode2) {
   const auto start = std::chrono::steady_clock::now();
   const auto r = mpirun(2, "offline " + bad.string() + " --out " + out.string());
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("mpirun -np 2 with a bad case: exit %d after %.1f s\n", r.exit_code, seconds);
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_LT(seconds, 30.0);
   // Both ranks say the same (the file and the key), no "rank" prefix: they all failed alike.
