@@ -63,23 +63,6 @@ std::string serial_offline_database() {
   return bytes(kReference / "database.h5");
 }
 
-// The station files in out's checkpoint folder, of stations `first` and after.
-std::size_t station_files(const fs::path& out, std::size_t first = 0) {
-  std::size_t n = 0;
-  std::error_code error;
-  for (const auto& e : fs::directory_iterator(out / ".checkpoint", error)) {
-    const std::string name = e.path().filename().string();
-    n += name.rfind("station_", 0) == 0 && std::stoul(name.substr(8, 5)) >= first;
-  }
-  return n;
-}
-
-std::size_t count(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-  return n;
-}
-
 nlohmann::json summary(const fs::path& out) {
   std::ifstream in(out / "summary.json");
   return nlohmann::json::parse(in);
@@ -105,6 +88,23 @@ TEST(DistributedReference, SerialRun) {
 }
 
 #ifdef DROM_MPIEXEC
+// The station files in out's checkpoint folder, of stations `first` and after.
+std::size_t station_files(const fs::path& out, std::size_t first = 0) {
+  std::size_t n = 0;
+  std::error_code error;
+  for (const auto& e : fs::directory_iterator(out / ".checkpoint", error)) {
+    const std::string name = e.path().filename().string();
+    n += name.rfind("station_", 0) == 0 && std::stoul(name.substr(8, 5)) >= first;
+  }
+  return n;
+}
+
+std::size_t count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
 // mpirun as root refuses to start unless told (docs/distributed.md); the tests may run as root.
 const std::string kMpirun = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " + std::string(DROM_MPIEXEC) + " --oversubscribe -np ";
 
