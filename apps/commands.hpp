@@ -19,6 +19,8 @@ struct CommandOptions {
   int stop_after = -1;   // solve at most this many stations in this invocation, then stop (batch, tests)
   int threads = 0;       // 0: one per hardware thread
   int frames = -1;       // full-field VTK frames; -1: 10 for truth, none for offline
+  std::string stations;  // "a:b": only these stations, into the checkpoint folder (drom merge after)
+  std::string merge_kind = "offline";  // drom merge: the slices of drom offline or of drom truth
   // drom reduce (case_path holds the database)
   double tolerance = 1e-3;          // mm, POD truncation bound
   double history_tolerance = -1;    // mm, all space-time compressions together; -1: tolerance / 2
@@ -49,6 +51,7 @@ int check_command(const CommandOptions& options);  // drom check
 int removal_command(const CommandOptions& options);  // drom removal
 int offline_command(const CommandOptions& options);  // drom offline
 int truth_command(const CommandOptions& options);    // drom truth
+int merge_command(const CommandOptions& options);    // drom merge
 int reduce_command(const CommandOptions& options);   // drom reduce
 int deviation_command(const CommandOptions& options);  // drom deviation
 int machine_command(const CommandOptions& options);    // drom machine

@@ -6,7 +6,20 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cstdio>
 #include <iostream>
+#include <string>
+
+namespace {
+
+// A message in one write: under mpirun every rank may say it at once, and the launcher forwards
+// each write whole (piecewise writes came out interleaved).
+void say_once(const std::string& message) {
+  std::fflush(stdout);
+  std::fwrite(message.data(), 1, message.size(), stderr);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   // First, before any thread has an arena of its own: the station solves' large blocks are kept and
@@ -31,6 +44,8 @@ int main(int argc, char** argv) {
       {"removal", "compute the material each tool station removes, on the case's mesh", drom::app::removal_command},
       {"offline", "simulate the machining once per unit stress profile: the snapshot database (B1, B2)", drom::app::offline_command},
       {"truth", "simulate the machining for the case's own stress profile, with full fields", drom::app::truth_command},
+      {"merge", "assemble database.h5 from the slices that drom offline / truth --stations a:b left in --out's checkpoint folder",
+       drom::app::merge_command},
       {"reduce", "compress an offline database into the light model the online predictor loads", drom::app::reduce_command},
       {"deviation", "learn an unknown blank's deviation from laser profiles during the approach (seed chapter 2)", drom::app::deviation_command},
       {"copy", "copy a scanned part from its point cloud by 3+2 machining: normals, visibility, packets, roughing and finishing per packet, G-code",
@@ -92,8 +107,11 @@ int main(int argc, char** argv) {
       cmd->add_option("--param", options.study_parameter, "the parameter: noise, angle, refresh, calibration, desync, amplitude or seed (the noise draw)")->required();
       cmd->add_option("--values", options.study_values, "its values, e.g. --values 0,0.02,0.05")->required()->delimiter(',');
     }
-    if (std::string(sub.name) == "run")
+    if (std::string(sub.name) == "run") {
       cmd->add_flag("--replan", options.replan, "re-plan a finishing pass on the predicted final shape, sampled as a cloud, and report its distance to the truth");
+      cmd->add_option("--threads", options.threads, "the offline-and-truth pass's worker threads, per rank (default: one per hardware thread)")
+          ->check(CLI::PositiveNumber);
+    }
     if (std::string(sub.name) == "finish")
       cmd->add_option("--threads", options.threads, "K values optimised at once (default: one per hardware thread)")->check(CLI::PositiveNumber);
     if (std::string(sub.name) == "offline" || std::string(sub.name) == "truth") {
@@ -102,6 +120,13 @@ int main(int argc, char** argv) {
       cmd->add_option("--threads", options.threads, "worker threads (default: one per hardware thread)")->check(CLI::PositiveNumber);
       cmd->add_option("--frames", options.frames, "full-field VTK frames over the stations (default: 10 for truth, 0 for offline)")
           ->check(CLI::NonNegativeNumber);
+      cmd->add_option("--stations", options.stations,
+                      "only stations a to b - 1 (a:b, a: or :b), into --out's checkpoint folder; drom merge writes the database once all are there");
+    }
+    if (std::string(sub.name) == "merge") {
+      cmd->add_option("--kind", options.merge_kind, "the slices of drom offline or of drom truth")->capture_default_str()->check(CLI::IsMember({"offline", "truth"}));
+      cmd->add_option("--threads", options.threads, "worker threads for the final shape (default: one per hardware thread)")->check(CLI::PositiveNumber);
+      cmd->add_option("--frames", options.frames, "as the slices were run with (default: 10 for truth, 0 for offline)")->check(CLI::NonNegativeNumber);
     }
     commands.emplace_back(cmd, &sub);
   }
@@ -125,10 +150,10 @@ int main(int argc, char** argv) {
     try {
       return sub->run(options);
     } catch (const drom::InputError& e) {
-      std::cerr << "drom " << sub->name << ": error: " << e.what() << "\n";
+      say_once(std::string("drom ") + sub->name + ": error: " + e.what() + "\n");
       return 2;
     } catch (const std::exception& e) {
-      std::cerr << "drom " << sub->name << ": failed: " << e.what() << "\n";
+      say_once(std::string("drom ") + sub->name + ": failed: " + e.what() + "\n");
       return 1;
     }
   }

@@ -1,5 +1,7 @@
 #include "fem/elastic_problem.hpp"
 
+#include "support/byte_stream.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <stdexcept>
@@ -87,6 +89,31 @@ void ElasticProblem::adopt_equilibrium(const ElasticProblem& other) {
   u0_ = other.u0_;
   r0_ = other.r0_;
   relative_residual_ = other.relative_residual_;
+  equilibrated_ = true;
+}
+
+std::string ElasticProblem::equilibrium_bytes() const {
+  if (!equilibrated_) throw std::logic_error("equilibrium_bytes: not equilibrated");
+  ByteWriter w;
+  w.put(std::vector<std::int64_t>(group_sizes_.begin(), group_sizes_.end()));
+  w.put(u0_);
+  w.put(r0_);
+  w.put(relative_residual_);
+  return w.take();
+}
+
+void ElasticProblem::adopt_equilibrium(std::string_view bytes) {
+  ByteReader r(bytes, "an equilibrium");
+  const auto groups = r.vector<std::int64_t>();
+  Eigen::MatrixXd u0 = r.matrix(), r0 = r.matrix();
+  const auto residual = r.get<double>();
+  const auto P = static_cast<Eigen::Index>(profiles_.size());
+  if (!r.done() || u0.rows() != mesh_.dof_count() || u0.cols() != P || r0.rows() != u0.rows() || r0.cols() != P)
+    throw std::invalid_argument("adopt_equilibrium: the bytes are not an equilibrium of this mesh and these profiles");
+  group_sizes_.assign(groups.begin(), groups.end());
+  u0_ = std::move(u0);
+  r0_ = std::move(r0);
+  relative_residual_ = residual;
   equilibrated_ = true;
 }
 

@@ -18,6 +18,8 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace drom::fem {
@@ -35,6 +37,11 @@ class ElasticProblem {
   // Or take the equilibrium another problem on the same mesh, part and profiles computed (so parallel
   // workers share one equilibration), and its profile groups.
   void adopt_equilibrium(const ElasticProblem& other);
+  // The equilibrium (u0, r0, its residual, the profile groups) as bytes, and adopted from them: what
+  // rank 0 of an MPI job hands the other ranks (offline/job_team.hpp), bit for bit. The bytes must
+  // come from a problem on the same mesh and profiles (checked by size: std::invalid_argument).
+  std::string equilibrium_bytes() const;
+  void adopt_equilibrium(std::string_view bytes);
   // Before equilibrate: the profiles in consecutive groups of these sizes (default: one group), each
   // loaded and solved on its own, so that a group's columns are bit for bit those of a problem
   // holding that group alone (the quadrature follows a group's highest degree, and a triangular solve

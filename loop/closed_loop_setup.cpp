@@ -43,6 +43,18 @@ struct Stage {
   offline::JobOptions options;
 };
 
+// The stage for `text` in `dir`, as it runs (rank 0 has decided it must, and prepared `dir`).
+Stage stage_in(const std::string& text, const std::filesystem::path& dir, const RunOptions& options) {
+  Stage stage{cases::case_from_text(text, (dir / "case.toml").string()), {}};
+  stage.options.out = dir;
+  stage.options.quiet = options.quiet;
+  stage.options.threads = options.threads;
+  stage.options.frames = 0;
+  stage.options.resume = std::filesystem::exists(dir / ".checkpoint");
+  stage.options.team = options.team;
+  return stage;
+}
+
 std::optional<Stage> stage_to_run(const std::string& text, const std::filesystem::path& dir, const RunOptions& options) {
   const auto case_file = dir / "case.toml";
   const auto database = dir / "database.h5";
@@ -61,13 +73,7 @@ std::optional<Stage> stage_to_run(const std::string& text, const std::filesystem
   }
   std::filesystem::create_directories(dir);
   write_file_atomically(case_file, text);
-  Stage stage{c, {}};
-  stage.options.out = dir;
-  stage.options.quiet = options.quiet;
-  stage.options.threads = options.threads;
-  stage.options.frames = 0;
-  stage.options.resume = std::filesystem::exists(dir / ".checkpoint");
-  return stage;
+  return stage_in(text, dir, options);
 }
 
 // Checks a stage wrote its database.
@@ -76,24 +82,34 @@ void check_finished(const offline::JobResult& result, const std::filesystem::pat
     throw InputError(dir.string() + ": the stage stopped before writing database.h5; run again to resume it");
 }
 
-}  // namespace
 
-ClosedLoopInputs prepare_closed_loop(const cases::Case& c, const RunOptions& options) {
-  ClosedLoopInputs in;
-  in.shape = offline::build_part(c).shape;
-  // 1. The machining simulations: the offline snapshots of the basis's unit profiles (nothing of the
-  //    truth or the loop in their case, so changing those reuses them) and the truth, the [truth]
-  //    profile on the same mesh and program. When both must be computed, one pass serves them: one
-  //    factorization per station, each database the one its own stage would write.
+// 1. The machining simulations: the offline snapshots of the basis's unit profiles (nothing of the
+//    truth or the loop in their case, so changing those reuses them) and the truth, the [truth]
+//    profile on the same mesh and program. When both must be computed, one pass serves them: one
+//    factorization per station, each database the one its own stage would write. Rank 0 decides
+//    what is computed (and clears stale databases); the other ranks of an MPI job follow it.
+void machining_stages(const cases::Case& c, const RunOptions& options, ClosedLoopInputs& in) {
+  offline::SoloTeam solo;
+  offline::JobTeam& team = options.team ? *options.team : solo;
   auto strip = [&](std::vector<std::string> tables) { return case_text_without(c.resolved_toml, tables, kPathKeys, c.origin); };
   std::vector<std::string> offline_tables = kLoopTables;
   offline_tables.push_back("truth");
-  const auto offline_stage = stage_to_run(strip(offline_tables), options.out / "offline", options);
-  const auto truth_stage = stage_to_run(strip(kLoopTables), options.out / "truth", options);
+  const std::string offline_text = strip(offline_tables), truth_text = strip(kLoopTables);
+  std::optional<Stage> offline_stage, truth_stage;
+  const std::string plan = offline::on_root_then_broadcast(team, [&] {
+    offline_stage = stage_to_run(offline_text, options.out / "offline", options);
+    truth_stage = stage_to_run(truth_text, options.out / "truth", options);
+    return std::string{offline_stage ? '1' : '0', truth_stage ? '1' : '0'};
+  });
+  offline::on_every_rank(team, [&] {
+    if (team.root()) return;
+    if (plan[0] == '1') offline_stage = stage_in(offline_text, options.out / "offline", options);
+    if (plan[1] == '1') truth_stage = stage_in(truth_text, options.out / "truth", options);
+  });
   in.reused_offline = !offline_stage;
   in.reused_truth = !truth_stage;
   auto say = [&](const std::string& what) {
-    if (!options.quiet) std::cerr << "drom run: 1/2 " << what << "\n";
+    if (!options.quiet && team.root()) std::cerr << "drom run: 1/2 " << what << "\n";
   };
   const auto stages_start = std::chrono::steady_clock::now();
   if (offline_stage && truth_stage) {
@@ -116,6 +132,19 @@ ClosedLoopInputs prepare_closed_loop(const cases::Case& c, const RunOptions& opt
       in.truth_seconds = seconds_since(truth_start);
     }
   }
+}
+
+}  // namespace
+
+void help_prepare_closed_loop(const cases::Case& c, const RunOptions& options) {
+  ClosedLoopInputs ignored;
+  machining_stages(c, options, ignored);
+}
+
+ClosedLoopInputs prepare_closed_loop(const cases::Case& c, const RunOptions& options) {
+  ClosedLoopInputs in;
+  machining_stages(c, options, in);  // first: the other ranks of an MPI job wait for it
+  in.shape = offline::build_part(c).shape;
 
   // 2. The light model, at the case's control.model_tolerance. Always reduced again (seconds): the
   //    model depends on the database and on how it is reduced.

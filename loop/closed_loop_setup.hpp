@@ -4,6 +4,7 @@
 // unchanged), and the closed loop's settings from the case.
 #include "case/case.hpp"
 #include "levelset/part_shape.hpp"
+#include "offline/job_team.hpp"
 #include "online/closed_loop.hpp"
 #include "reduce/light_model.hpp"
 
@@ -25,6 +26,9 @@ struct RunOptions {
   bool quiet = false;                 // no progress on stderr
   int threads = 0;                    // the offline job's workers; 0: one per hardware thread
   bool replan = false;                // re-plan a finishing pass on the predicted final shape (loop/replanned_finish.hpp)
+  // The ranks of an MPI job (mpirun -np N drom run): they share the offline-and-truth pass, then rank 0
+  // alone goes on. Null: this process alone.
+  offline::JobTeam* team = nullptr;
 };
 
 // The truth run, as the closed loop plays it.
@@ -54,7 +58,11 @@ struct ClosedLoopInputs {
 };
 
 // Runs (or reuses) out/offline, out/model and out/truth for the case. Progress on stderr unless quiet.
+// With options.team, this is rank 0's part; the other ranks call help_prepare_closed_loop.
 ClosedLoopInputs prepare_closed_loop(const cases::Case& c, const RunOptions& options);
+// A rank after rank 0 of an MPI drom run: its share of the machining pass that prepare_closed_loop
+// runs on rank 0, nothing else.
+void help_prepare_closed_loop(const cases::Case& c, const RunOptions& options);
 
 // The measurement sigma is the sensor's noise and the model's own error bound together: a noise-free
 // sensor still sees what the model cannot represent, and the band should say so.

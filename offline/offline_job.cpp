@@ -8,7 +8,12 @@
 #include "offline/machining_run.hpp"
 #include "offline/part_setup.hpp"
 #include "offline/station_solvers.hpp"
+#include "offline/activity_history.hpp"
+#include "offline/job_team.hpp"
+#include "offline/station_schedule.hpp"
 #include "support/atomic_file.hpp"
+#include "support/byte_stream.hpp"
+#include "support/fnv_hash.hpp"
 #include "support/file_format.hpp"
 #include "support/hdf5_writer.hpp"
 #include "support/input_error.hpp"
@@ -18,9 +23,11 @@
 #include "support/toml_reader.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <fstream>
@@ -36,22 +43,21 @@ namespace drom::offline {
 
 namespace {
 
-std::uint64_t fnv1a(const void* data, std::size_t bytes, std::uint64_t hash = 1469598103934665603ull) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
-  return hash;
-}
-
-std::string hex(std::uint64_t v) {
-  char buf[20];
-  std::snprintf(buf, sizeof buf, "%016" PRIx64, v);
-  return buf;
-}
-
-// Per-station results on disk, so an interrupted run loses no finished station.
+// Per-station results on disk (OUT/.checkpoint), so an interrupted run loses no finished station,
+// the ranks of an MPI job share their work, and slices computed apart are merged:
+//   manifest.txt             the job's identity (mode and case hash)
+//   station_NNNNN.bin, final.bin   the job's key, the seconds its solve took, then one matrix (ByteWriter)
+//   slices/slice_A_B.json    what each --stations A:B run was, where, and whether it finished
+// The folder must be one every rank (and every slice) sees.
 class Checkpoint {
  public:
-  Checkpoint(std::filesystem::path dir, const std::string& identity, bool resume) : dir_(std::move(dir)) {
+  enum class Join {
+    Fresh,     // a new job: refuses a folder holding an unfinished one (unless resuming)
+    Resume,    // continue the job here, or start it
+    Shared,    // join the job here or start it (a slice; the slices meet in one folder)
+    Existing,  // the job must be here (drom merge; the ranks after rank 0)
+  };
+  Checkpoint(std::filesystem::path dir, const std::string& identity, Join join) : dir_(std::move(dir)), key_(fnv1a(identity)) {
     const auto manifest = dir_ / "manifest.txt";
     if (std::filesystem::exists(manifest)) {
       std::ifstream in(manifest);
@@ -59,7 +65,9 @@ class Checkpoint {
       if (found != identity)
         throw InputError(dir_.string() + ": holds an unfinished run of a different case or mode; it will not be mixed with this one "
                                          "(remove the folder or choose another --out)");
-      if (!resume) throw InputError(dir_.string() + ": an unfinished run is here; pass --resume to continue it, or remove the folder");
+      if (join == Join::Fresh) throw InputError(dir_.string() + ": an unfinished run is here; pass --resume to continue it, or remove the folder");
+    } else if (join == Join::Existing) {
+      throw InputError(dir_.string() + ": no job's stations are here (run the slices with --stations a:b and the same --out first)");
     } else {
       std::filesystem::create_directories(dir_);
       write_file_atomically(manifest, identity);
@@ -67,27 +75,66 @@ class Checkpoint {
   }
   std::filesystem::path file(const std::string& name) const { return dir_ / (name + ".bin"); }
   bool has(const std::string& name) const { return std::filesystem::exists(file(name)); }
-  void save(const std::string& name, const Eigen::MatrixXd& m) const {
-    std::string bytes(sizeof(Eigen::Index) * 2 + sizeof(double) * static_cast<std::size_t>(m.size()), '\0');
-    const Eigen::Index dims[2] = {m.rows(), m.cols()};
-    std::memcpy(bytes.data(), dims, sizeof dims);
-    std::memcpy(bytes.data() + sizeof dims, m.data(), sizeof(double) * static_cast<std::size_t>(m.size()));
-    write_file_atomically(file(name), bytes);
+  void save(const std::string& name, const Eigen::MatrixXd& m, double seconds) const {
+    ByteWriter w;
+    w.put(key_);
+    w.put(seconds);
+    w.put(m);
+    write_file_atomically(file(name), w.bytes());
   }
-  Eigen::MatrixXd load(const std::string& name) const {
+  // The seconds a saved file's solve took (its header only: the schedule reads it for every station);
+  // 0 when the file is missing or not this job's.
+  double seconds(const std::string& name) const {
     std::ifstream in(file(name), std::ios::binary);
-    Eigen::Index dims[2] = {0, 0};
-    in.read(reinterpret_cast<char*>(dims), sizeof dims);
-    Eigen::MatrixXd m(dims[0], dims[1]);
-    in.read(reinterpret_cast<char*>(m.data()), static_cast<std::streamsize>(sizeof(double) * static_cast<std::size_t>(m.size())));
-    if (!in) throw InputError(file(name).string() + ": truncated checkpoint");
+    std::array<char, sizeof key_ + sizeof(double)> header{};
+    if (!in.read(header.data(), header.size())) return 0;
+    ByteReader r(std::string_view(header.data(), header.size()), file(name).string());
+    if (r.get<std::uint64_t>() != key_) return 0;
+    const double s = r.get<double>();
+    return std::isfinite(s) && s > 0 ? s : 0;
+  }
+  // Throws InputError naming the file (and the slice that should have written it) when it is not
+  // this job's.
+  Eigen::MatrixXd load(const std::string& name, std::size_t station) const {
+    std::ifstream in(file(name), std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ByteReader r(bytes, file(name).string());
+    if (bytes.size() < sizeof key_ || r.get<std::uint64_t>() != key_)
+      throw InputError(file(name).string() + ": written by another job" + slice_holding(station) + ", not this one's; remove it and rerun its stations");
+    r.get<double>();  // the seconds its solve took: the schedule's, not the database's
+    Eigen::MatrixXd m = r.matrix();
+    if (!r.done()) throw InputError(file(name).string() + ": malformed checkpoint" + slice_holding(station));
     return m;
+  }
+  // A slice's record, rewritten as it progresses.
+  void record_slice(const StationRange& range, const nlohmann::json& record) const {
+    std::filesystem::create_directories(dir_ / "slices");
+    write_file_atomically(dir_ / "slices" / ("slice_" + std::to_string(range.first) + "_" + std::to_string(range.last) + ".json"), record.dump(1) + "\n");
+  }
+  // " (slice 40:80 on node3, unfinished)" for the slice whose record covers station k; "" if none.
+  std::string slice_holding(std::size_t k) const {
+    std::error_code error;
+    for (const auto& entry : std::filesystem::directory_iterator(dir_ / "slices", error)) {
+      std::ifstream in(entry.path());
+      const auto record = nlohmann::json::parse(in, nullptr, false);
+      if (record.is_discarded() || !record.contains("first") || !record.contains("last")) continue;
+      if (k >= record["first"].get<std::size_t>() && k < record["last"].get<std::size_t>())
+        return " (slice " + record.value("stations", std::string("?")) + " on " + record.value("host", std::string("?")) + ", " +
+               (record.value("finished", false) ? "finished" : "unfinished") + ")";
+    }
+    return "";
   }
   void remove() const { std::filesystem::remove_all(dir_); }
 
  private:
   std::filesystem::path dir_;
+  std::uint64_t key_;
 };
+
+std::string host_name() {
+  char name[256] = {};
+  return gethostname(name, sizeof name - 1) == 0 ? std::string(name) : std::string("?");
+}
 
 std::string station_name(std::size_t k) {
   char buf[32];
@@ -195,14 +242,14 @@ nlohmann::json write_database(const Output& o, const PartModel& part, const std:
   const auto nt = target.size(), ntop = top.size();
   std::vector<double> B1(ns * nt * static_cast<std::size_t>(P)), B1_top(ns * ntop * static_cast<std::size_t>(P));
   for (std::size_t k = 0; k < ns; ++k) {
-    const Eigen::MatrixXd W = o.checkpoint->load(station_name(k));
+    const Eigen::MatrixXd W = o.checkpoint->load(station_name(k), k);
     if (W.rows() != static_cast<Eigen::Index>(nt + ntop) || W.cols() != P) throw InputError(o.checkpoint->file(station_name(k)).string() + ": not this run's station");
     for (std::size_t i = 0; i < nt; ++i)
       for (Eigen::Index p = 0; p < P; ++p) B1[(k * nt + i) * static_cast<std::size_t>(P) + static_cast<std::size_t>(p)] = W(static_cast<Eigen::Index>(i), p);
     for (std::size_t i = 0; i < ntop; ++i)
       for (Eigen::Index p = 0; p < P; ++p) B1_top[(k * ntop + i) * static_cast<std::size_t>(P) + static_cast<std::size_t>(p)] = W(static_cast<Eigen::Index>(nt + i), p);
   }
-  const Eigen::MatrixXd U2 = o.checkpoint->load("final");
+  const Eigen::MatrixXd U2 = o.checkpoint->load("final", ns);
   std::vector<double> B2(static_cast<std::size_t>(U2.size()));
   for (Eigen::Index r = 0; r < U2.rows(); ++r)
     for (Eigen::Index p = 0; p < P; ++p) B2[static_cast<std::size_t>(r * P + p)] = U2(r, p);
@@ -301,76 +348,174 @@ nlohmann::json write_database(const Output& o, const PartModel& part, const std:
 }
 
 // The machining simulation, once for all `outputs` (one factorization per station serves them all);
-// each output's database is what a pass of its own would write, bit for bit.
+// each output's database is what a pass of its own would write, bit for bit. With several ranks
+// (offline/job_team.hpp), rank 0 sweeps the removal and equilibrates the stock, every rank solves
+// its block of stations, and rank 0 writes the databases: the same bytes, whatever the ranks.
 std::vector<JobResult> simulate(std::vector<Output>& outputs) {
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return seconds_since(start); };
   const bool interactive = isatty(2) != 0;
-  const JobOptions& options = outputs.front().options;  // quiet, threads, stop_after, progress
+  const JobOptions& options = outputs.front().options;  // quiet, threads, stop_after, progress, stations, merge, team
+  SoloTeam solo;
+  JobTeam& team = options.team ? *options.team : solo;
+  const bool quiet = options.quiet || !team.root();
   // The part from the case that names the truth: the cases may differ by [truth] only (and by the
   // loop's tables, which no machining reads), or the pass would not be theirs.
   const auto with_truth = std::find_if(outputs.begin(), outputs.end(), [](const Output& o) { return o.truth; });
   const cases::Case& c = (with_truth != outputs.end() ? *with_truth : outputs.front()).c;
-  const std::vector<std::string> not_machining = {"truth", "sensor", "sync", "control", "run"};
-  for (const auto& o : outputs)
-    if (case_text_without(o.c.resolved_toml, not_machining, {}, "") != case_text_without(c.resolved_toml, not_machining, {}, ""))
-      throw std::invalid_argument("one machining pass for " + o.c.origin + " and " + c.origin + ": their cases machine different parts");
-  const PartModel part = build_part(c);
-  const auto& mesh = part.mesh;
-  const auto clamped = clamp_dofs(c, part);
-  std::vector<int> target;
-  try {
-    target = fem::target_surface_nodes(mesh, part.shape, {c.pocket_x, c.pocket_x + c.pocket_length_x, c.pocket_y, c.pocket_y + c.pocket_length_y,
-                                                          part.shape.thickness() - c.pocket_depth});
-  } catch (const std::invalid_argument& e) {
-    throw InputError(c.origin + ": mesh.nz: " + e.what());
-  }
-  // The stock's top face, all of it: where the tool has not been, a laser reads it, and its w is an
-  // absolute measurement (not a difference since a cut, as on the floor).
-  const std::vector<int> top = fem::target_surface_nodes(mesh, part.shape, {0, part.shape.length_u(), 0, part.shape.length_v(), part.shape.thickness()});
+  std::unique_ptr<PartModel> part_model;
+  std::vector<int> clamped, target, top;
   std::vector<fem::StressProfile> profiles;
   std::vector<int> groups;
-  for (auto& o : outputs) {
-    o.profiles = o.truth ? std::vector<fem::StressProfile>{part.truth_profile} : fem::unit_profiles(part.degrees);
-    o.first = static_cast<Eigen::Index>(profiles.size());
-    profiles.insert(profiles.end(), o.profiles.begin(), o.profiles.end());
-    groups.push_back(static_cast<int>(o.profiles.size()));
-    o.mode = o.truth ? "truth" : "offline";
-    o.case_hash = fnv1a(o.c.resolved_toml.data(), o.c.resolved_toml.size());
-    // Rows per station: the target's nodes, then the top's ("+top": checkpoints of runs before the
-    // top was kept hold fewer rows and are not mixed in).
-    o.checkpoint = std::make_unique<Checkpoint>(o.options.out / ".checkpoint", o.mode + "+top " + hex(o.case_hash) + "\n", o.options.resume);
-  }
+  on_every_rank(team, [&] {
+    const std::vector<std::string> not_machining = {"truth", "sensor", "sync", "control", "run"};
+    for (const auto& o : outputs)
+      if (case_text_without(o.c.resolved_toml, not_machining, {}, "") != case_text_without(c.resolved_toml, not_machining, {}, ""))
+        throw std::invalid_argument("one machining pass for " + o.c.origin + " and " + c.origin + ": their cases machine different parts");
+    part_model = std::make_unique<PartModel>(build_part(c));
+    const auto& mesh = part_model->mesh;
+    clamped = clamp_dofs(c, *part_model);
+    try {
+      target = fem::target_surface_nodes(mesh, part_model->shape, {c.pocket_x, c.pocket_x + c.pocket_length_x, c.pocket_y, c.pocket_y + c.pocket_length_y,
+                                                                   part_model->shape.thickness() - c.pocket_depth});
+    } catch (const std::invalid_argument& e) {
+      throw InputError(c.origin + ": mesh.nz: " + e.what());
+    }
+    // The stock's top face, all of it: where the tool has not been, a laser reads it, and its w is an
+    // absolute measurement (not a difference since a cut, as on the floor).
+    top = fem::target_surface_nodes(mesh, part_model->shape, {0, part_model->shape.length_u(), 0, part_model->shape.length_v(), part_model->shape.thickness()});
+    for (auto& o : outputs) {
+      o.profiles = o.truth ? std::vector<fem::StressProfile>{part_model->truth_profile} : fem::unit_profiles(part_model->degrees);
+      o.first = static_cast<Eigen::Index>(profiles.size());
+      profiles.insert(profiles.end(), o.profiles.begin(), o.profiles.end());
+      groups.push_back(static_cast<int>(o.profiles.size()));
+      o.mode = o.truth ? "truth" : "offline";
+      o.case_hash = fnv1a(o.c.resolved_toml);
+    }
+  });
+  const PartModel& part = *part_model;
+  const auto& mesh = part.mesh;
+  // The shared checkpoint folder: rank 0 opens (or starts) it, the other ranks join it after. Rows per
+  // station: the target's nodes, then the top's ("+top+key": checkpoints of older runs are not mixed in).
+  auto open_checkpoints = [&](Checkpoint::Join join) {
+    for (auto& o : outputs) o.checkpoint = std::make_unique<Checkpoint>(o.options.out / ".checkpoint", o.mode + "+top+key " + hex(o.case_hash) + "\n", join);
+  };
+  const Checkpoint::Join join = options.merge ? Checkpoint::Join::Existing
+                                : !options.stations.empty() ? Checkpoint::Join::Shared
+                                : options.resume ? Checkpoint::Join::Resume
+                                                 : Checkpoint::Join::Fresh;
+  on_root_then_broadcast(team, [&] {
+    open_checkpoints(join);
+    return std::string();
+  });
+  on_every_rank(team, [&] {
+    if (!team.root()) open_checkpoints(Checkpoint::Join::Existing);
+  });
   std::string modes;
   for (const auto& o : outputs) modes += (modes.empty() ? "" : " + ") + o.mode;
 
-  // 1. Removal: the activity of every station (level set, a few seconds).
-  MachiningRun run(c, part);
-  const auto& stations = run.stations();
-  const std::size_t ns = stations.size();
-  std::vector<std::vector<double>> activity(ns);
-  std::vector<double> remaining(static_cast<std::size_t>(mesh.element_count()), 1.0);
-  for (std::size_t k = 0; k < ns; ++k) {
-    run.advance(remaining);
-    activity[k] = remaining;
-  }
+  // 1. Removal, on rank 0: the activity of every station (level set, a few seconds), as what changes
+  //    from one station to the next; every rank replays it.
+  std::unique_ptr<MachiningRun> run;
+  const ActivityHistory history = ActivityHistory::from_bytes(on_root_then_broadcast(team, [&] {
+    run = std::make_unique<MachiningRun>(c, part);
+    ActivityHistory swept(static_cast<std::size_t>(mesh.element_count()));
+    std::vector<double> remaining(static_cast<std::size_t>(mesh.element_count()), 1.0);
+    for (std::size_t k = 0; k < run->stations().size(); ++k) {
+      run->advance(remaining);
+      swept.append(remaining);
+    }
+    return swept.bytes();
+  }), "rank 0's removal");
+  const std::size_t ns = history.stations();
   const double removal_seconds = elapsed();
   const auto P = static_cast<Eigen::Index>(profiles.size());
-  if (!options.quiet)
+  if (!quiet)
     std::cerr << "drom " << modes << ": " << c.name << ": " << ns << " stations, " << mesh.dof_count() << " unknowns, " << P << " profile"
-              << (P > 1 ? "s" : "") << ", " << target.size() << " target-surface nodes (removal " << removal_seconds << " s)\n";
+              << (P > 1 ? "s" : "") << ", " << target.size() << " target-surface nodes (removal " << removal_seconds << " s)"
+              << (team.size() > 1 ? ", " + std::to_string(team.size()) + " ranks" : "") << "\n";
+  StationRange range{0, ns};
+  on_every_rank(team, [&] {
+    if (!options.stations.empty()) range = parse_station_range(options.stations, ns, "--stations");
+  });
 
   // Station workers fill the cores; threads inside each factorization would fight them (measured: a
   // third of the run in system time). Single-threaded kernels also round the same way whatever
   // --threads is, so the database does not depend on it.
   const SingleThreadedKernels single_threaded_kernels;
 
-  // 2. Equilibrate once; every worker adopts it.
-  const auto solvers = StationSolvers::create(c, part, profiles, clamped, groups);
+  // 2. Equilibrate once, on rank 0; every rank adopts it, and every worker from its rank.
+  std::unique_ptr<StationSolvers> solvers;
+  const std::string equilibrium = on_root_then_broadcast(team, [&] {
+    solvers = StationSolvers::create(c, part, profiles, clamped, groups);
+    return solvers->equilibrium();
+  });
+  on_every_rank(team, [&] {
+    if (!team.root()) solvers = StationSolvers::create(c, part, profiles, clamped, groups, equilibrium);
+  });
   const double equilibrium_seconds = elapsed() - removal_seconds;
 
-  // 3. Stations, in parallel (independent given activity, or chunks of them for a warm-starting
-  //    solver), each one checkpointed.
+  auto saved_by_all = [&](const std::string& name) {
+    return std::all_of(outputs.begin(), outputs.end(), [&](const Output& o) { return o.checkpoint->has(name); });
+  };
+  // 3. The stations still missing, dealt out by rank 0 in contiguous blocks of chunks (a warm-starting
+  //    solver's chunk is solved in order from its first station), balanced by their estimated cost:
+  //    the cost law calibrated on the solve times the stations already saved measured.
+  std::size_t done_before = 0;
+  std::size_t measured_stations = 0;
+  std::vector<std::size_t> missing;  // rank 0's view, for merge's refusal
+  const std::string dealt = on_root_then_broadcast(team, [&] {
+    std::vector<double> measured(ns, 0.0);
+    for (std::size_t k = 0; k < ns; ++k) {
+      if (saved_by_all(station_name(k))) {
+        ++done_before;
+        measured[k] = outputs.front().checkpoint->seconds(station_name(k));
+        measured_stations += measured[k] > 0;
+      } else {
+        missing.push_back(k);
+      }
+    }
+    if (options.merge && !missing.empty()) {
+      std::string list;
+      for (std::size_t i = 0; i < missing.size();) {
+        std::size_t j = i;
+        while (j + 1 < missing.size() && missing[j + 1] == missing[j] + 1) ++j;
+        if (list.size() > 400) {
+          list += ", ...";
+          break;
+        }
+        list += (list.empty() ? "" : ", ") + to_string(StationRange{missing[i], missing[j] + 1}) + outputs.front().checkpoint->slice_holding(missing[i]);
+        i = j + 1;
+      }
+      throw InputError((outputs.front().options.out / ".checkpoint").string() + ": " + std::to_string(missing.size()) + " of " + std::to_string(ns) +
+                       " stations are missing, stations " + list + " (a:b is stations a to b - 1); run them with --stations a:b, then merge again");
+    }
+    const auto tasks = chunk_tasks(ns, solvers->chunk(), [&](std::size_t k) { return range.contains(k) && !saved_by_all(station_name(k)); },
+                                   calibrated_costs(station_costs(history), measured));
+    const auto blocks = deal_blocks(tasks, team.size(), 0);
+    ByteWriter w;
+    w.put<std::uint64_t>(done_before);
+    for (const auto& block : blocks) {
+      w.put<std::uint64_t>(block.size());
+      for (const auto& t : block) w.put<std::uint64_t>(t.first), w.put<std::uint64_t>(t.last), w.put(t.cost);
+    }
+    return w.take();
+  });
+  std::vector<ChunkTask> mine;
+  {
+    ByteReader r(dealt, "rank 0's schedule");
+    done_before = r.get<std::uint64_t>();
+    for (int rank = 0; rank < team.size(); ++rank) {
+      const auto count = r.get<std::uint64_t>();
+      for (std::uint64_t i = 0; i < count; ++i) {
+        ChunkTask t;
+        t.first = r.get<std::uint64_t>();
+        t.last = r.get<std::uint64_t>();
+        t.cost = r.get<double>();
+        if (rank == team.rank()) mine.push_back(t);
+      }
+    }
+  }
   const int threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
   for (auto& o : outputs) {
     const int wanted = o.options.frames >= 0 ? o.options.frames : (o.truth ? 10 : 0);
@@ -382,19 +527,29 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
     for (Eigen::Index p = 0; !o.truth && p < o.count(); ++p) named.emplace_back(profile_name(o.profiles[static_cast<std::size_t>(p)]), U.col(o.first + p));
     return named;
   };
-  auto saved_by_all = [&](const std::string& name) {
-    return std::all_of(outputs.begin(), outputs.end(), [&](const Output& o) { return o.checkpoint->has(name); });
+  auto slice_record = [&](bool finished, std::size_t saved) {
+    if (options.stations.empty()) return;
+    const nlohmann::json record{{"stations", to_string(range)}, {"first", range.first}, {"last", range.last},
+                                {"host", host_name()}, {"ranks", team.size()},
+                                {"finished", finished}, {"stations_saved_by_this_run", saved}};
+    for (const auto& o : outputs) o.checkpoint->record_slice(range, record);
   };
-  const std::size_t chunk = solvers->chunk();
-  const std::size_t chunks = (ns + chunk - 1) / chunk;
+  on_root_then_broadcast(team, [&] {
+    slice_record(false, 0);
+    return std::string();
+  });
+  std::mutex report;
+  auto print_progress = [&](std::size_t done) {
+    const bool report_now = interactive || done % std::max<std::size_t>(1, ns / 50) == 0 || done == ns;
+    if (quiet || !report_now) return;
+    const double rate = static_cast<double>(done - done_before) / std::max(1e-9, elapsed() - removal_seconds - equilibrium_seconds);
+    std::fprintf(stderr, "%s  station %zu/%zu  %.2f stations/s  %.0f s left%s", interactive ? "\r" : "", done, ns, rate,
+                 static_cast<double>(ns - done) / std::max(1e-9, rate), interactive ? "   " : "\n");
+  };
   std::atomic<std::size_t> next{0};
   std::atomic<int> solved{0};
-  std::atomic<bool> cancelled{false};  // the progress callback asked to stop
-  std::mutex report;
-  std::exception_ptr failure;
+  StationWork work;
   nlohmann::json solver_statistics = nlohmann::json::object();
-  std::size_t done_before = 0;
-  for (std::size_t k = 0; k < ns; ++k) done_before += saved_by_all(station_name(k));
   auto worker = [&] {
     try {
       // Again here: OpenMP's max-active-levels is kept per thread, so a worker thread starts with
@@ -403,20 +558,22 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
       const SingleThreadedKernels worker_kernels;
       const auto solver = solvers->make_worker();
       bool stopped = false;
-      for (std::size_t j = next++; j < chunks && !stopped && !cancelled; j = next++) {
-        const std::size_t first = j * chunk, last = std::min(ns, first + chunk);
-        std::size_t missing = first;
-        while (missing < last && saved_by_all(station_name(missing))) ++missing;
-        if (missing == last) continue;
+      std::vector<double> activity;
+      for (std::size_t j = next++; j < mine.size() && !stopped && !work.cancelled(); j = next++) {
+        const ChunkTask task = mine[j];
         // A chunk restarts from its first station (cold), so a resumed run solves exactly what an
         // uninterrupted one does; finished stations are recomputed but not written again.
-        for (std::size_t k = first; k < last; ++k) {
-          const bool saved = saved_by_all(station_name(k));
-          if (!saved && (cancelled || (options.stop_after >= 0 && solved.fetch_add(1) >= options.stop_after))) {
+        activity = history.at(task.first);
+        for (std::size_t k = task.first; k < task.last; ++k) {
+          if (k > task.first) history.advance(k, activity);
+          const bool saved = !range.contains(k) || saved_by_all(station_name(k));
+          if (!saved && (work.cancelled() || (options.stop_after >= 0 && solved.fetch_add(1) >= options.stop_after))) {
             stopped = true;
             break;
           }
-          const Eigen::MatrixXd U = solver->solve(activity[k], k > first);
+          const auto solve_start = std::chrono::steady_clock::now();
+          const Eigen::MatrixXd U = solver->solve(activity, k > task.first);
+          const double solve_seconds = seconds_since(solve_start);
           if (saved) continue;
           for (const auto& o : outputs) {
             if (o.checkpoint->has(station_name(k))) continue;
@@ -425,65 +582,94 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
             for (std::size_t i = 0; i < top.size(); ++i)
               W.row(static_cast<Eigen::Index>(target.size() + i)) = U.row(3 * top[i] + 2).segment(o.first, o.count());
             if (frame_at(k, ns, o.frames)) solver->write_vtu(o.options.out / "frames" / (station_name(k) + ".vtu"), names(o, U), static_cast<std::size_t>(o.first));
-            o.checkpoint->save(station_name(k), W);
+            o.checkpoint->save(station_name(k), W, solve_seconds);
           }
-          std::lock_guard<std::mutex> lock(report);
-          const auto done = static_cast<double>(++done_before);
-          const bool report_now = interactive || static_cast<std::size_t>(done) % std::max<std::size_t>(1, ns / 50) == 0 || static_cast<std::size_t>(done) == ns;
-          if (!options.quiet && report_now) {
-            const double rate = done / std::max(1e-9, elapsed() - removal_seconds - equilibrium_seconds);
-            std::fprintf(stderr, "%s  station %zu/%zu  %.2f stations/s  %.0f s left%s", interactive ? "\r" : "", static_cast<std::size_t>(done), ns, rate,
-                         (static_cast<double>(ns) - done) / rate, interactive ? "   " : "\n");
+          const std::size_t saved_here = work.saved_one();
+          if (team.reports_per_station()) {
+            std::lock_guard<std::mutex> lock(report);
+            print_progress(done_before + saved_here);
+            if (options.progress && !options.progress(done_before + saved_here, ns)) work.cancel();
           }
-          if (options.progress && !options.progress(static_cast<std::size_t>(done), ns)) cancelled = true;
         }
       }
       std::lock_guard<std::mutex> lock(report);
       accumulate(solver_statistics, solver->statistics());
     } catch (...) {
-      std::lock_guard<std::mutex> lock(report);
-      failure = std::current_exception();
+      work.fail(std::current_exception());
     }
+    work.worker_done();
   };
   std::vector<std::thread> pool;
+  work.start(threads);
   for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+  try {
+    // Rank 0 reports the whole job's progress (several ranks: a few times a second).
+    team.supervise(work, [&](std::size_t saved) {
+      print_progress(done_before + saved);
+      return !options.progress || options.progress(done_before + saved, ns);
+    });
+  } catch (...) {
+    work.cancel();
+    for (auto& t : pool) t.join();
+    throw;
+  }
   for (auto& t : pool) t.join();
-  if (!options.quiet && interactive) std::cerr << "\n";
-  if (failure) std::rethrow_exception(failure);
-  std::size_t finished = 0;
-  for (std::size_t k = 0; k < ns; ++k) finished += saved_by_all(station_name(k));
+  if (!quiet && interactive) std::cerr << "\n";
+  // Every rank's solver figures, summed on rank 0.
+  const auto figures = team.gather(solver_statistics.dump());
+  for (std::size_t r = 1; r < figures.size(); ++r) accumulate(solver_statistics, nlohmann::json::parse(figures[r]));
+
+  // 4. and 5., on rank 0: the free final shape (best-fit alignment, one column per profile) and each
+  //    database, from the checkpoints (so a resumed or distributed run writes the same bytes).
   std::vector<JobResult> results(outputs.size());
-  for (auto& r : results) {
-    r.stations = ns;
-    r.stations_saved = finished;
-  }
-  if (finished < ns) {
-    if (!options.quiet) std::cerr << "drom " << modes << ": stopped after " << finished << " of " << ns << " stations; continue with --resume\n";
-    return results;
-  }
-
-  // 4. The free final shape (best-fit alignment), one column per profile.
-  if (!saved_by_all("final")) {
-    const auto solver = solvers->make_worker();
-    const Eigen::MatrixXd U = solver->free_shape(activity.back());
-    accumulate(solver_statistics, {{"final_shape", solver->statistics()}});
-    for (const auto& o : outputs) {
-      if (o.checkpoint->has("final")) continue;
-      solver->write_vtu(o.options.out / "final_free_shape.vtu", names(o, U), static_cast<std::size_t>(o.first));
-      o.checkpoint->save("final", U.middleCols(o.first, o.count()));
+  const std::string summaries = on_root_then_broadcast(team, [&] {
+    std::size_t finished = 0;
+    for (std::size_t k = 0; k < ns; ++k) finished += saved_by_all(station_name(k));
+    nlohmann::json all = nlohmann::json::array();
+    if (!options.stations.empty()) {
+      std::size_t in_range = 0;
+      for (std::size_t k = range.first; k < range.last; ++k) in_range += saved_by_all(station_name(k));
+      slice_record(in_range == range.size(), work.saved());
+      if (!quiet)
+        std::cerr << "drom " << modes << ": slice " << to_string(range) << ": " << in_range << " of " << range.size() << " stations saved; " << finished
+                  << " of " << ns << " in the job" << (finished == ns ? ": drom merge writes the database\n" : "\n");
+      return nlohmann::json{{"saved", finished}, {"summaries", all}}.dump();
     }
-  }
-
-  // 5. Each database, from its checkpoints (so a resumed run writes the same bytes).
-  for (std::size_t i = 0; i < outputs.size(); ++i) {
-    results[i].summary = write_database(outputs[i], part, target, top, stations, run.path(), activity.back(), elapsed, removal_seconds,
-                                        {{"threads", threads},
-                                         {"solver", c.solver},
-                                         {"solver_statistics", solver_statistics},
-                                         {"equilibrium", solvers->equilibrium_statistics()},
-                                         {"equilibrium_time_s", equilibrium_seconds},
-                                         {"pass_outputs", modes}});
-    results[i].finished = true;
+    if (finished < ns) {
+      if (!quiet) std::cerr << "drom " << modes << ": stopped after " << finished << " of " << ns << " stations; continue with --resume\n";
+      return nlohmann::json{{"saved", finished}, {"summaries", all}}.dump();
+    }
+    const std::vector<double> final_activity = history.at(ns - 1);
+    if (!saved_by_all("final")) {
+      const auto solver = solvers->make_worker();
+      const auto solve_start = std::chrono::steady_clock::now();
+      const Eigen::MatrixXd U = solver->free_shape(final_activity);
+      const double solve_seconds = seconds_since(solve_start);
+      accumulate(solver_statistics, {{"final_shape", solver->statistics()}});
+      for (const auto& o : outputs) {
+        if (o.checkpoint->has("final")) continue;
+        solver->write_vtu(o.options.out / "final_free_shape.vtu", names(o, U), static_cast<std::size_t>(o.first));
+        o.checkpoint->save("final", U.middleCols(o.first, o.count()), solve_seconds);
+      }
+    }
+    for (auto& o : outputs)
+      all.push_back(write_database(o, part, target, top, run->stations(), run->path(), final_activity, elapsed, removal_seconds,
+                                   {{"threads", threads},
+                                    {"ranks", team.size()},
+                                    {"solver", c.solver},
+                                    {"solver_statistics", solver_statistics},
+                                    {"equilibrium", solvers->equilibrium_statistics()},
+                                    {"equilibrium_time_s", equilibrium_seconds},
+                                    {"deal_measured_stations", measured_stations},
+                                    {"pass_outputs", modes}}));
+    return nlohmann::json{{"saved", finished}, {"summaries", all}}.dump();
+  });
+  const auto outcome = nlohmann::json::parse(summaries);
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    results[i].stations = ns;
+    results[i].stations_saved = outcome["saved"].get<std::size_t>();
+    results[i].finished = i < outcome["summaries"].size();
+    if (results[i].finished) results[i].summary = outcome["summaries"][i];
   }
   return results;
 }

@@ -24,6 +24,8 @@
 
 namespace drom::offline {
 
+class JobTeam;
+
 enum class JobKind { Offline, Truth };
 
 struct JobOptions {
@@ -37,6 +39,16 @@ struct JobOptions {
   // far, of how many. Returning false stops the job after the stations in progress (resume later).
   // An exception thrown here stops the job and comes out of run_job.
   std::function<bool(std::size_t saved, std::size_t total)> progress;
+  // Only the stations a:b (Python's slice: a to b - 1) into the shared checkpoint folder, for
+  // schedulers without MPI; no database (drom merge writes it once every slice is there).
+  std::string stations;
+  // drom merge: every station must be in the checkpoint folder already (else InputError naming the
+  // missing ones and the slices that should have made them); then the final shape and the database.
+  bool merge = false;
+  // The ranks running this job together (offline/process_team.hpp); null: this process alone. With
+  // several, rank 0 prints, calls `progress` for the whole job and writes the files; stop_after
+  // counts per rank; the other ranks' results hold the job's outcome, not its files.
+  JobTeam* team = nullptr;
 };
 
 struct JobResult {

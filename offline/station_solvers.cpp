@@ -81,11 +81,16 @@ class FeStation final : public StationSolver {
 
 class FeSolvers final : public StationSolvers {
  public:
-  FeSolvers(const PartModel& part, const std::vector<fem::StressProfile>& profiles, const std::vector<int>& clamped, const std::vector<int>& groups)
+  FeSolvers(const PartModel& part, const std::vector<fem::StressProfile>& profiles, const std::vector<int>& clamped, const std::vector<int>& groups,
+            std::string_view equilibrium)
       : part_(part), profiles_(profiles), clamped_(clamped), base_(part.mesh, part.shape, part.material, profiles) {
     if (!groups.empty()) base_.set_profile_groups(groups);
-    base_.equilibrate(fem::isostatic_dofs(part.mesh, part.shape, std::vector<char>(static_cast<std::size_t>(part.mesh.node_count()), 1)));
+    if (!equilibrium.empty())
+      base_.adopt_equilibrium(equilibrium);
+    else
+      base_.equilibrate(fem::isostatic_dofs(part.mesh, part.shape, std::vector<char>(static_cast<std::size_t>(part.mesh.node_count()), 1)));
   }
+  std::string equilibrium() const override { return base_.equilibrium_bytes(); }
   std::unique_ptr<StationSolver> make_worker() const override { return std::make_unique<FeStation>(part_, profiles_, clamped_, base_); }
   std::size_t chunk() const override { return 1; }
   nlohmann::json equilibrium_statistics() const override { return {{"factorize_s", base_.solver_stats().factorize_seconds}}; }
@@ -189,6 +194,7 @@ class PgdSolvers final : public StationSolvers {
   }
   std::unique_ptr<StationSolver> make_worker() const override { return std::make_unique<PgdStation>(case_, part_, profiles_, clamped_, base_); }
   std::size_t chunk() const override { return 16; }
+  std::string equilibrium() const override { return {}; }
   nlohmann::json equilibrium_statistics() const override {
     nlohmann::json s = nlohmann::json::object();
     add_reports(s, base_.equilibration_reports());
@@ -221,10 +227,10 @@ void accumulate(nlohmann::json& total, const nlohmann::json& add) {
 }
 
 std::unique_ptr<StationSolvers> StationSolvers::create(const cases::Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles,
-                                                       const std::vector<int>& clamped, const std::vector<int>& groups) {
+                                                       const std::vector<int>& clamped, const std::vector<int>& groups, std::string_view equilibrium) {
   // The PGD solves every profile on its own already.
   if (c.solver == "pgd") return std::make_unique<PgdSolvers>(c, part, profiles, clamped);
-  return std::make_unique<FeSolvers>(part, profiles, clamped, groups);
+  return std::make_unique<FeSolvers>(part, profiles, clamped, groups, equilibrium);
 }
 
 }  // namespace drom::offline

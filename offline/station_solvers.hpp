@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -42,14 +43,20 @@ class StationSolvers {
   // Equilibrates the intact stock under each profile. `groups` (sizes, in order; empty: one group):
   // profiles loaded and solved apart, so that each group's columns are bit for bit what a run of that
   // group alone gives (drom run computes the offline and truth databases in one pass).
+  // `equilibrium`: what equilibrium() of another process's solvers for the same case gave (rank 0 of
+  // an MPI job); adopted instead of equilibrating again when not empty.
   static std::unique_ptr<StationSolvers> create(const cases::Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles,
-                                                const std::vector<int>& clamped, const std::vector<int>& groups = {});
+                                                const std::vector<int>& clamped, const std::vector<int>& groups = {},
+                                                std::string_view equilibrium = {});
   virtual std::unique_ptr<StationSolver> make_worker() const = 0;
   // Stations a worker takes at a time and solves in order: the FE solves each station on its own (1);
   // the PGD warm-starts each station from the previous one within a chunk. Chunks start cold, so the
   // results do not depend on the thread count nor on where a run was interrupted.
   virtual std::size_t chunk() const = 0;
   virtual nlohmann::json equilibrium_statistics() const = 0;
+  // The equilibrated stock as bytes for create(); empty when the solver cannot hand it over (the PGD's
+  // separated fields: each rank equilibrates on its own, with the same bytes as a result).
+  virtual std::string equilibrium() const = 0;
 };
 
 // Sums the numbers of two statistics objects key by key (nested objects too); "worst_*" keys keep the

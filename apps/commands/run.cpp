@@ -1,7 +1,9 @@
 // drom run and drom study: the closed loop on a case (loop/closed_loop_run.hpp, closed_loop_study.hpp).
 #include "apps/commands.hpp"
 #include "loop/closed_loop_run.hpp"
+#include "loop/closed_loop_setup.hpp"
 #include "loop/closed_loop_study.hpp"
+#include "offline/process_team.hpp"
 
 #include <cstdio>
 
@@ -9,13 +11,24 @@ namespace drom::app {
 
 namespace {
 
-loop::RunOptions run_options(const CommandOptions& options) { return {options.out, options.quiet, options.threads, options.replan}; }
+loop::RunOptions run_options(const CommandOptions& options) {
+  return {options.out, options.quiet, options.threads, options.replan, nullptr};
+}
 
 }  // namespace
 
 int run_command(const CommandOptions& options) {
-  const cases::Case c = loop::load_run_case(options.case_path, options.overrides);
-  const loop::RunResult r = loop::run_closed_loop(c, run_options(options));
+  // Under mpirun, every rank shares the offline-and-truth pass; rank 0 alone runs the rest.
+  const auto team = offline::join_launched_team();
+  cases::Case c;
+  offline::on_every_rank(*team, [&] { c = loop::load_run_case(options.case_path, options.overrides); });
+  loop::RunOptions run = run_options(options);
+  run.team = team.get();
+  if (!team->root()) {
+    loop::help_prepare_closed_loop(c, run);
+    return 0;
+  }
+  const loop::RunResult r = loop::run_closed_loop(c, run);
   if (options.quiet) return 0;
   const loop::Headline& h = r.headline;
   std::printf("drom run: %s (%s scale), model r = %d, %zu passes, sensor noise %.3g mm\n", c.name.c_str(), c.run_scale.c_str(), r.model_rank,

@@ -10,8 +10,8 @@ struct DromResult {
   std::string output;
 };
 
-inline DromResult run_drom(const std::string& args) {
-  const std::string cmd = std::string(DROM_BINARY) + " " + args + " 2>&1";
+inline DromResult run_drom(const std::string& args, const std::string& binary = DROM_BINARY) {
+  const std::string cmd = binary + " " + args + " 2>&1";
   FILE* pipe = popen(cmd.c_str(), "r");
   std::string out;
   std::array<char, 4096> buf;
