@@ -5,6 +5,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -12,6 +13,16 @@
 namespace drom::levelset {
 
 namespace {
+
+// A byte for a message: itself if printable, else its code.
+std::string printable(char c) {
+  if (std::isprint(static_cast<unsigned char>(c))) return "'" + std::string(1, c) + "'";
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "byte 0x%02x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+  return buf;
+}
+
+constexpr double kLargest = 1e6;
 
 struct Modal {
   int motion = -1;  // 0, 1, 2, 3
@@ -56,29 +67,41 @@ Toolpath parse_gcode(const std::string& text, const std::string& origin) {
         ++i;
         continue;
       }
-      if (!std::isalpha(static_cast<unsigned char>(c))) throw InputError(where + "expected a word letter, got '" + std::string(1, line[i]) + "'");
+      if (!std::isalpha(static_cast<unsigned char>(c))) throw InputError(where + "expected a word letter, got " + printable(line[i]));
       ++i;
       while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
-      std::size_t used = 0;
-      double value = 0;
-      try {
-        value = std::stod(line.substr(i), &used);
-      } catch (const std::exception&) {
-        throw InputError(where + "word '" + std::string(1, c) + "' has no number");
-      }
-      i += used;
+      // The number in place (no copy of the rest of the line: a long line would cost its square).
+      // Only a plain decimal: strtod's "inf", "nan" and hexadecimal forms are no G-code.
+      const char* begin = line.c_str() + i;
+      char* end = nullptr;
+      const double value = std::strtod(begin, &end);
+      const std::string text(begin, static_cast<std::size_t>(end - begin));
+      if (end == begin) throw InputError(where + "word '" + std::string(1, c) + "' has no number");
+      if (!std::isfinite(value) || text.find_first_not_of("+-.0123456789eE") != std::string::npos)
+        throw InputError(where + "word '" + std::string(1, c) + "' has '" + text + "', not a finite decimal number");
+      i += static_cast<std::size_t>(end - begin);
+      // Words that name a code or a register take whole numbers of a few digits (G one decimal).
+      auto code = [&](double scale, double max) {
+        const double v = value * scale;
+        if (v < 0 || v > max || std::abs(v - std::round(v)) > 1e-6 * scale)
+          throw InputError(where + "word '" + std::string(1, c) + text + "' is not a code drom knows");
+        return static_cast<int>(std::lround(v));
+      };
       switch (c) {
-        case 'G': g_codes.push_back(static_cast<int>(std::lround(value * 10))); break;
+        case 'G': g_codes.push_back(code(10, 9999)); break;
         case 'N': case 'T': case 'S': break;
         case 'M': {
-          const int m = static_cast<int>(value);
+          const int m = code(1, 999);
           if (m != 0 && m != 1 && m != 2 && m != 3 && m != 4 && m != 5 && m != 6 && m != 8 && m != 9 && m != 30)
             throw InputError(where + "unsupported word M" + std::to_string(m));
           break;
         }
-        case 'H': modal.tool_length_offset = static_cast<int>(value); h_seen = true; break;
+        case 'H': modal.tool_length_offset = code(1, 99999); h_seen = true; break;
         case 'X': case 'Y': case 'Z': case 'I': case 'J': case 'K': case 'R': case 'F':
           if (words.count(c)) throw InputError(where + "word " + std::string(1, c) + " appears twice");
+          // A kilometre (or 10^6 mm/min) is beyond any machine: such a number is a corrupted program,
+          // and squaring it (arcs) must stay finite.
+          if (std::abs(value) > kLargest) throw InputError(where + "word " + std::string(1, c) + text + " is beyond any machine (|value| <= 1e6)");
           words[c] = value;
           break;
         default: throw InputError(where + "unsupported word '" + std::string(1, c) + "'");

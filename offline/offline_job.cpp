@@ -61,6 +61,8 @@ class Checkpoint {
                                          "(remove the folder or choose another --out)");
       if (!resume) throw InputError(dir_.string() + ": an unfinished run is here; pass --resume to continue it, or remove the folder");
     } else {
+      // Station files without a manifest are not known to be this run's (a removal cut short): gone.
+      std::filesystem::remove_all(dir_);
       std::filesystem::create_directories(dir_);
       write_file_atomically(manifest, identity);
     }
@@ -78,12 +80,22 @@ class Checkpoint {
     std::ifstream in(file(name), std::ios::binary);
     Eigen::Index dims[2] = {0, 0};
     in.read(reinterpret_cast<char*>(dims), sizeof dims);
+    // Its size must be what its dimensions say before anything is allocated from them.
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(file(name), ec);
+    if (!in || ec || dims[0] < 0 || dims[1] < 0 || (dims[1] > 0 && dims[0] > static_cast<Eigen::Index>(size / 8) / dims[1]) ||
+        size != sizeof dims + sizeof(double) * static_cast<std::size_t>(dims[0] * dims[1]))
+      throw InputError(file(name).string() + ": a damaged checkpoint (" + std::to_string(ec ? 0 : size) + " bytes); remove " + dir_.string() + " to start over");
     Eigen::MatrixXd m(dims[0], dims[1]);
     in.read(reinterpret_cast<char*>(m.data()), static_cast<std::streamsize>(sizeof(double) * static_cast<std::size_t>(m.size())));
     if (!in) throw InputError(file(name).string() + ": truncated checkpoint");
     return m;
   }
-  void remove() const { std::filesystem::remove_all(dir_); }
+  // The manifest first: a removal cut short leaves no manifest over a partial set of stations.
+  void remove() const {
+    std::filesystem::remove(dir_ / "manifest.txt");
+    std::filesystem::remove_all(dir_);
+  }
 
  private:
   std::filesystem::path dir_;
@@ -267,7 +279,6 @@ nlohmann::json write_database(const Output& o, const PartModel& part, const std:
       if (frame_at(k, ns, o.frames)) pvd.add(stations[k].time, std::filesystem::path("frames") / (station_name(k) + ".vtu"));
     pvd.write(o.options.out / (o.mode + ".pvd"));
   }
-  o.checkpoint->remove();
 
   double max_w = 0;
   for (double v : B1) max_w = std::max(max_w, std::abs(v));
@@ -293,6 +304,7 @@ nlohmann::json write_database(const Output& o, const PartModel& part, const std:
                                              : nlohmann::json{"database.h5", "final_free_shape.vtu"}}};
   summary.update(pass);
   write_summary(o.options.out, summary);
+  o.checkpoint->remove();  // last: a job stopped before this resumes from its stations and writes all again
   return summary;
   if (!o.options.quiet)
     std::printf("drom %s: %s: %zu stations x %lld profile(s), %d unknowns, %.1f s (%.2f s per station on %d threads) -> %s/database.h5 (%.1f MB)\n",

@@ -253,6 +253,7 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
     if (progress && k % std::max(1L, steps / 100) == 0) progress(static_cast<double>(k) / static_cast<double>(steps));
   }
   result.calibration = machine.calibration();
+  result.rejections = predictor.rejections();
   result.estimate = predictor.estimate();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

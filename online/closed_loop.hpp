@@ -116,6 +116,7 @@ struct ClosedLoopResult {
   double learned_at = -1;          // program time (true) at which the predictor declared itself learned
   long long profiles = 0;
   ProfileReport points;            // totals over all profiles
+  Rejections rejections;           // what the predictor left out, by reason
   Estimate estimate;               // at the end
   CalibrationBias calibration;     // empty without calibration errors
   double seconds = 0;

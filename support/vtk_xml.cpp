@@ -2,9 +2,11 @@
 
 #include "support/atomic_file.hpp"
 
+#include <vtkErrorCode.h>
 #include <vtkXMLWriter.h>
 
 #include <stdexcept>
+#include <string>
 
 namespace drom {
 
@@ -13,7 +15,11 @@ void write_vtk_xml(vtkXMLWriter& writer, const std::filesystem::path& path) {
   writer.SetFileName(file.temporary_path().c_str());
   writer.SetDataModeToAppended();
   writer.SetCompressorTypeToZLib();
-  if (writer.Write() != 1) throw std::runtime_error("cannot write " + path.string());
+  const int written = writer.Write();
+  const unsigned long error = writer.GetErrorCode();
+  if (written != 1 || error != vtkErrorCode::NoError)
+    throw std::runtime_error("cannot write " + path.string() +
+                             (error == vtkErrorCode::OutOfDiskSpaceError ? ": No space left on device" : ": VTK error " + std::to_string(error)));
   file.commit();
 }
 

@@ -52,6 +52,25 @@ TEST(GCode, RejectsBadProgramsNamingTheLine) {
   EXPECT_NE(error_of("G0 X0\nM98\n").find("prog.nc:2: unsupported word M98"), std::string::npos);
 }
 
+// Issue 27: what the fuzzer found (fuzz/gcode.cpp, docs/robustness.md), each with the error expected.
+TEST(GCode, HostileNumbersAreAClearErrorNotUndefinedBehaviour) {
+  // The first finding: an M word of 108 digits was cast to int (UBSan: float-cast-overflow).
+  EXPECT_NE(error_of("M" + std::string(107, '4') + "1M0\xe8S1M0M0S1").find("prog.nc:1: word 'M4444"), std::string::npos);
+  EXPECT_NE(error_of("M" + std::string(107, '4') + "1M0\xe8S1M0M0S1").find("' is not a code drom knows"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG1e300 X1\n").find("prog.nc:2: word 'G1e300' is not a code drom knows"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG43 H1e20 Z1\n").find("prog.nc:2: word 'H1e20' is not a code drom knows"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG1 X5 F-1\n").find("prog.nc:2: F must be positive"), std::string::npos);
+  // strtod's other forms are not G-code numbers.
+  EXPECT_NE(error_of("G0 Xnan Y0 Z0\n").find("prog.nc:1: word 'X' has 'nan', not a finite decimal number"), std::string::npos);
+  EXPECT_NE(error_of("G0 X-inf Y0 Z0\n").find("prog.nc:1: word 'X' has '-inf', not a finite decimal number"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0x1p3 Y0 Z0\n").find("prog.nc:1: word 'X' has '0x1p3', not a finite decimal number"), std::string::npos);
+  EXPECT_NE(error_of("G0 X1e400\n").find("prog.nc:1: word 'X' has '1e400', not a finite decimal number"), std::string::npos);
+  // Finite but beyond any machine: an arc of that radius would overflow its square.
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG2 X1 Y0 R1e200 F100\n").find("prog.nc:2: word R1e200 is beyond any machine"), std::string::npos);
+  // A byte that is not text is named by its code.
+  EXPECT_NE(error_of(std::string("G0 X0\n\x01G1\n", 10)).find("prog.nc:2: expected a word letter, got byte 0x01"), std::string::npos);
+}
+
 TEST(GCode, WriteThenReadReproducesMoves) {
   Toolpath path;
   Move a;

@@ -1,0 +1,13 @@
+# -DDROM_FUZZ=ON (clang only; docs/robustness.md): the whole tree is built with AddressSanitizer and
+# UndefinedBehaviorSanitizer, and with libFuzzer's coverage instrumentation, so one build serves the
+# fuzz harnesses (fuzz/) and the sanitized test subset (ctest -L sanitized). Any UB aborts.
+if(NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")
+  message(FATAL_ERROR "DROM_FUZZ needs clang (libFuzzer): CC=clang CXX=clang++ cmake -DDROM_FUZZ=ON ... (scripts/fuzz does this)")
+endif()
+add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=all -fsanitize=fuzzer-no-link -fno-omit-frame-pointer -g)
+add_link_options(-fsanitize=address,undefined)
+# An instrumented Python module would need ASan preloaded into python: not built here.
+set(DROM_PYTHON OFF CACHE BOOL "Build the drom Python module" FORCE)
+# The test executables that run sanitized (tests/CMakeLists.txt labels their tests "sanitized"):
+# every module's unit tests but the end-to-end ones, which run the drom binary for minutes.
+set(DROM_SANITIZED_TESTS support_tests case_tests levelset_tests fem_tests reduce_tests online_tests)

@@ -1,0 +1,157 @@
+// drom_fuzz_seeds <corpus folder> <base folder>: the seed corpus of every harness, made from the shipped
+// cases (cases/*.toml): the case files themselves, their quick overrides, their toolpaths as G-code,
+// their stress profiles as tables, their stock as STL, the chapter 2 blank as a measured surface,
+// and the flat plate's coarse snapshot database and light model (the base files of the *_fields
+// harnesses). Deterministic: the same tree gives the same seeds.
+#include "case/case.hpp"
+#include "fem/residual_stress.hpp"
+#include "levelset/gcode.hpp"
+#include "offline/offline_job.hpp"
+#include "offline/part_setup.hpp"
+#include "reduce/database_reduction.hpp"
+#include "reduce/deviation_family.hpp"
+#include "support/atomic_file.hpp"
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace drom;
+
+namespace {
+
+const fs::path kCases = DROM_SOURCE_DIR "/cases";
+
+void put(const fs::path& file, const std::string& bytes) { write_file_atomically(file, bytes); }
+
+std::string joined(const std::vector<std::string>& lines) {
+  std::string s;
+  for (const auto& l : lines) s += l + "\n";
+  return s;
+}
+
+std::string stress_table(const fem::StressProfile& p, double thickness) {
+  std::ostringstream csv;
+  csv << "depth,sigma11,sigma22\n";
+  for (int i = 0; i <= 10; ++i) {
+    const double depth = thickness * i / 10.0;
+    const Eigen::Vector2d s = p.evaluate(1 - 2 * depth / thickness);
+    csv << depth << "," << s.x() << "," << s.y() << "\n";
+  }
+  return csv.str();
+}
+
+// The 12 triangles of an axis-aligned box, outward.
+std::vector<std::array<Eigen::Vector3d, 3>> box_triangles(double lx, double ly, double lz) {
+  const auto corner = [&](int i) { return Eigen::Vector3d((i & 1) ? lx : 0, (i & 2) ? ly : 0, (i & 4) ? lz : 0); };
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  std::vector<std::array<Eigen::Vector3d, 3>> t;
+  for (const auto& q : quads) {
+    t.push_back({corner(q[0]), corner(q[1]), corner(q[2])});
+    t.push_back({corner(q[0]), corner(q[2]), corner(q[3])});
+  }
+  return t;
+}
+
+std::string ascii_stl(const std::vector<std::array<Eigen::Vector3d, 3>>& tris) {
+  std::ostringstream s;
+  s << "solid stock\n";
+  for (const auto& t : tris) {
+    const Eigen::Vector3d n = (t[1] - t[0]).cross(t[2] - t[0]).normalized();
+    s << " facet normal " << n.x() << " " << n.y() << " " << n.z() << "\n  outer loop\n";
+    for (const auto& v : t) s << "   vertex " << v.x() << " " << v.y() << " " << v.z() << "\n";
+    s << "  endloop\n endfacet\n";
+  }
+  s << "endsolid stock\n";
+  return s.str();
+}
+
+std::string binary_stl(const std::vector<std::array<Eigen::Vector3d, 3>>& tris) {
+  std::string s(80, ' ');
+  const auto count = static_cast<std::uint32_t>(tris.size());
+  s.append(reinterpret_cast<const char*>(&count), 4);
+  for (const auto& t : tris) {
+    const Eigen::Vector3d n = (t[1] - t[0]).cross(t[2] - t[0]).normalized();
+    float f[12];
+    for (int k = 0; k < 3; ++k) f[k] = static_cast<float>(n[k]);
+    for (int v = 0; v < 3; ++v)
+      for (int k = 0; k < 3; ++k) f[3 + 3 * v + k] = static_cast<float>(t[static_cast<std::size_t>(v)][k]);
+    s.append(reinterpret_cast<const char*>(f), sizeof f);
+    s.append(2, '\0');
+  }
+  return s;
+}
+
+std::string file_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 3) {
+    std::fprintf(stderr, "usage: drom_fuzz_seeds <corpus folder> <base folder>\n");
+    return 2;
+  }
+  const fs::path corpus = argv[1], base = argv[2];
+  try {
+    for (const char* name : {"flat_plate", "curved_panel"}) {
+      const fs::path file = kCases / (std::string(name) + ".toml");
+      put(corpus / "case_file" / (std::string(name) + ".toml"), file_text(file));
+      const cases::Case written = cases::load_case(file, {});
+      put(corpus / "case_overrides" / (std::string(name) + "_quick"), joined(written.run_quick));
+      const cases::Case c = cases::load_case(file, written.run_quick);
+      const offline::PartModel part = offline::build_part(c);
+      put(corpus / "gcode" / (std::string(name) + ".nc"), levelset::write_gcode(offline::build_toolpath(c, part), c.name));
+      put(corpus / "stress_table" / (std::string(name) + ".csv"), stress_table(part.profile, part.shape.thickness()));
+      put(corpus / "stress_table" / (std::string(name) + "_truth.csv"), stress_table(part.truth_profile, part.shape.thickness()));
+      const auto box = box_triangles(c.length_x, c.length_y, c.thickness);
+      put(corpus / "stl" / (std::string(name) + "_ascii.stl"), ascii_stl(box));
+      put(corpus / "stl" / (std::string(name) + "_binary.stl"), binary_stl(box));
+    }
+    put(corpus / "case_overrides" / "docs", "sensor.noise=0\nrun.scale=seed\nmesh.nx=20\nmesh.ny=20\nclamps.0.box=[0,100,0,100]\ncontrol.correct=false\n");
+    put(corpus / "deviation_case" / "deviation.toml", file_text(kCases / "deviation.toml"));
+    std::ostringstream surface;
+    surface << "x,y,z\n";
+    for (int i = 0; i <= 5; ++i)
+      for (int j = 0; j <= 5; ++j) surface << 20.0 * i << "," << 20.0 * j << "," << reduce::seed_true_surface(20.0 * i, 20.0 * j) << "\n";
+    put(corpus / "measured_surface" / "seed_blank.csv", surface.str());
+
+    // The flat plate's coarse database and model: 5 x 5 x 5 Hex20, a station every 300 mm.
+    const cases::Case coarse = cases::load_case(kCases / "flat_plate.toml",
+                                                {"mesh.nx=5", "mesh.ny=5", "path.station_spacing=300", "removal.voxel_size=2.0", "clamps.0.box=[0,200,0,200]",
+                                                 "clamps.1.box=[800,1000,0,200]", "clamps.2.box=[0,200,800,1000]", "clamps.3.box=[800,1000,800,1000]"});
+    offline::JobOptions options;
+    options.out = base / "offline";
+    options.quiet = true;
+    if (!fs::exists(base / "database.h5")) {
+      fs::remove_all(options.out);
+      if (!offline::run_job(coarse, offline::JobKind::Offline, options).finished) throw std::runtime_error("the coarse offline job did not finish");
+      fs::copy_file(options.out / "database.h5", base / "database.h5", fs::copy_options::overwrite_existing);
+      const auto reduced = reduce::reduce_database(base / "database.h5", {});
+      reduce::write_reduction(base / "model" / "model.h5", reduced);
+      fs::copy_file(base / "model" / "model.h5", base / "model.h5", fs::copy_options::overwrite_existing);
+      fs::remove_all(options.out);
+      fs::remove_all(base / "model");
+    }
+    put(corpus / "database_bytes" / "flat_plate_coarse.h5", file_text(base / "database.h5"));
+    put(corpus / "model_bytes" / "flat_plate_coarse.h5", file_text(base / "model.h5"));
+    // The edit scripts: none (the base as it is), and a few bytes for the mutator to grow.
+    for (const char* harness : {"database_fields", "model_fields"}) {
+      put(corpus / harness / "unchanged", "");
+      put(corpus / harness / "one_edit", std::string("\x02\x05\x01\x00", 4));
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "drom_fuzz_seeds: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
