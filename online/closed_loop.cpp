@@ -254,6 +254,7 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
   }
   result.calibration = machine.calibration();
   result.rejections = predictor.rejections();
+  result.offset_bound = predictor.max_offset();
   result.estimate = predictor.estimate();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

@@ -117,6 +117,7 @@ struct ClosedLoopResult {
   long long profiles = 0;
   ProfileReport points;            // totals over all profiles
   Rejections rejections;           // what the predictor left out, by reason
+  double offset_bound = 0;         // mm: the bound the commanded offset was held within
   Estimate estimate;               // at the end
   CalibrationBias calibration;     // empty without calibration errors
   double seconds = 0;

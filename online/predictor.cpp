@@ -54,7 +54,7 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
   }
   normal_ = Eigen::MatrixXd::Zero(r_, r_);
   rhs_ = Eigen::VectorXd::Zero(r_);
-  suspect_ = kept_ = Share::zero(r_);
+  kept_ = Share::zero(r_);
 
   // Path samples: every path_sample mm along the programmed path (and at every waypoint).
   std::vector<double> times;
@@ -107,11 +107,6 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
       max_offset_ = std::max(max_offset_, std::abs(g.dot(prior_mean)) + 4 * std::sqrt(std::max(0.0, g.dot(prior_covariance * g.transpose()))));
     }
   }
-}
-
-Eigen::VectorXd Predictor::solve_with(const Share& extra) const {
-  const Eigen::MatrixXd precision = normal_ + extra.normal + prior_precision_;
-  return precision.llt().solve(rhs_ + extra.rhs + prior_rhs_);
 }
 
 Predictor::Share& Predictor::Share::operator+=(const Share& o) {
@@ -404,47 +399,34 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
     return s;
   };
   if (learned_ && off) {
-    suspect_ += share();  // the run so far, in case it turns out to be the part's
     if (++glitches_in_a_row_ >= settings_.glitch_run) {
-      // So many in a row: the sensor, or the fit? In doubt, no offset; both are scored from now on.
+      // So many in a row: the sensor, or the fit? In doubt, no offset until the trusted fit predicts
+      // the stream again.
       learned_ = false;
       in_doubt_ = true;
-      glitches_in_a_row_ = 0;
-      agree_trusted_ = agree_candidate_ = 0;
+      glitches_in_a_row_ = agree_trusted_ = 0;
       kept_ = Share::zero(r_);
-      candidate_alpha_ = solve_with(suspect_);
       ++rejections_.unlearned;
       snapshot_.store(std::make_shared<const Snapshot>(Snapshot{snap->alpha, snap->covariance, false}), std::memory_order_release);
     }
     return reject(rejections_.glitch, "off the learned fit as a whole (a glitch)");
   }
-  if (learned_) {
-    glitches_in_a_row_ = 0;
-    suspect_ = Share::zero(r_);
-  }
+  if (learned_) glitches_in_a_row_ = 0;
   if (in_doubt_) {
-    // The trusted fit (before the run) against the candidate (with the run and all since): the first
-    // to predict learning_window profiles in a row wins. The trusted: the run was the sensor's and
-    // leaves no trace. The candidate: the part left the trusted fit, and the run joins the fit.
-    const Share mine = share();
-    const bool off_candidate = judged && off_fit(candidate_alpha_);
-    suspect_ += mine;
-    candidate_alpha_ = solve_with(suspect_);
-    if (!off) kept_ += mine;
-    if (judged) {
-      agree_trusted_ = off ? 0 : agree_trusted_ + 1;
-      agree_candidate_ = off_candidate ? 0 : agree_candidate_ + 1;
-    }
-    if (agree_trusted_ < settings_.learning_window && agree_candidate_ < settings_.learning_window) return report;
-    const Share& winner = agree_trusted_ >= settings_.learning_window ? kept_ : suspect_;
-    ++(agree_trusted_ >= settings_.learning_window ? rejections_.doubts_sensor : rejections_.doubts_part);
-    normal_ += winner.normal;
-    rhs_ += winner.rhs;
-    points_ += winner.points;
-    profiles_ += winner.profiles;
+    // The trusted fit (as before the run) scores every profile: learning_window judged profiles in a
+    // row within the allowance end the doubt; the profiles it predicted join it, the others never do.
+    if (judged) agree_trusted_ = off ? 0 : agree_trusted_ + 1;
+    if (off) return reject(rejections_.glitch, "off the trusted fit while it is in doubt");
+    kept_ += share();
+    if (agree_trusted_ < settings_.learning_window) return report;
+    ++rejections_.doubts_sensor;
+    normal_ += kept_.normal;
+    rhs_ += kept_.rhs;
+    points_ += kept_.points;
+    profiles_ += kept_.profiles;
     in_doubt_ = false;
     learned_ = true;
-    suspect_ = kept_ = Share::zero(r_);
+    kept_ = Share::zero(r_);
     const Eigen::LLT<Eigen::MatrixXd> llt(normal_ + prior_precision_);
     snapshot_.store(std::make_shared<const Snapshot>(Snapshot{llt.solve(rhs_ + prior_rhs_), llt.solve(Eigen::MatrixXd::Identity(r_, r_)), true}),
                     std::memory_order_release);

@@ -34,13 +34,13 @@
 //   Recovery: before learning no offset is commanded, and a burst that got into the fit only delays
 //   the learning (recent profiles must be predicted within the tolerance). After learning, a run of
 //   glitch_run glitches in a row puts the fit in doubt: the sensor may be off, or the part may have
-//   left the fit. In doubt, no offset is commanded (it returns to 0 at the rate limit), and each
-//   profile is scored, by the same median test, against the trusted fit (as before the run) and a
-//   candidate (the trusted fit with the run and every profile since). The first to predict
-//   learning_window judged profiles in a row wins: the trusted fit, and the run is dropped without a
-//   trace (the profiles since that it predicted join it); or the candidate, and the run joins the
-//   fit. Until then the doubt holds: a sensor that stays off is never fitted, and never corrected
-//   for. rejections() counts each outcome.
+//   left the fit, and nothing in the readings alone tells which. In doubt, no offset is commanded (it
+//   returns to 0 at the rate limit, and the machine runs its program as written), and the trusted
+//   fit (as before the run) keeps scoring every profile by the same test: learning_window judged
+//   profiles in a row within the allowance end the doubt, the profiles it predicted join the fit,
+//   and the run leaves no trace. A sensor that stays off is never fitted and never corrected for; a
+//   part that truly left the fit is not followed either (it is reported: rejections().unlearned,
+//   summary.json's loop.rejected).
 #include "reduce/cut_time.hpp"
 #include "reduce/light_model.hpp"
 
@@ -89,8 +89,7 @@ struct Rejections {
   long long empty = 0;         // profiles with no usable point
   long long glitch = 0;        // profiles as a whole off a learned fit
   long long unlearned = 0;     // times a run of glitch_run glitches put the fit in doubt (no offset until resolved)
-  long long doubts_sensor = 0; // doubts resolved for the sensor: the trusted fit predicted again, the run was dropped
-  long long doubts_part = 0;   // doubts resolved for the part: the fit with the run predicted, the run was kept
+  long long doubts_sensor = 0; // doubts resolved: the trusted fit predicted the stream again, the run left no trace
   long long offsets_non_finite = 0;  // record_offset calls with a non-finite time or offset
   long long offsets_late = 0;        // record_offset calls older than the last offset recorded (taken, in their place)
   long long offsets_clamped = 0;     // tool_offset calls whose target passed max_offset
@@ -253,9 +252,8 @@ class Predictor {
   std::vector<MeasuredPoint> last_points_;  // the last profile taken (a frozen sensor repeats it)
   Rejections rejections_;                   // under ingest_, but for offsets_clamped (control thread)
   std::atomic<long long> offsets_clamped_{0};
-  // Profiles' shares of the normal equations, held apart from the fit: the current run of glitches
-  // (suspect_, then everything while in doubt) and, while in doubt, the profiles the trusted fit
-  // predicts (kept_).
+  // Profiles' shares of the normal equations, held apart from the fit while it is in doubt: those the
+  // trusted fit predicts (kept_), which join it when the doubt ends.
   struct Share {
     Eigen::MatrixXd normal;
     Eigen::VectorXd rhs;
@@ -264,11 +262,9 @@ class Predictor {
     Share& operator+=(const Share& o);
     static Share zero(int r);
   };
-  Eigen::VectorXd solve_with(const Share& extra) const;  // the fit with `extra` added
-  Share suspect_, kept_;
-  Eigen::VectorXd candidate_alpha_;
+  Share kept_;
   bool in_doubt_ = false;
-  int glitches_in_a_row_ = 0, agree_trusted_ = 0, agree_candidate_ = 0;
+  int glitches_in_a_row_ = 0, agree_trusted_ = 0;
   double max_offset_ = 0;
   std::vector<double> recent_square_error_, recent_count_;  // per recent profile
   reduce::OffsetHistory offsets_;                           // the applied offset over program time

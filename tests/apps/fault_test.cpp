@@ -68,12 +68,12 @@ int finish(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
 }
 
-struct Run {
+struct Outcome {
   int code;
   std::string output;
 };
 
-Run run(const std::vector<std::string>& a, const fs::path& scratch) {
+Outcome run(const std::vector<std::string>& a, const fs::path& scratch) {
   const auto log = scratch / "log.txt";
   fs::remove(log);
   const int code = finish(spawn(a, log));
@@ -108,8 +108,12 @@ std::string sealed(const fs::path& h5) {
 void expect_no_partial_file(const fs::path& dir, const std::string& when) {
   if (!fs::exists(dir)) return;
   for (const auto& e : fs::recursive_directory_iterator(dir)) {
-    if (e.path().extension() == ".h5") EXPECT_EQ(sealed(e.path()), "") << when;
-    if (e.path().filename() == "summary.json") EXPECT_EQ(bytes(e.path()).back(), '\n') << e.path() << " " << when;
+    if (e.path().extension() == ".h5") {
+      EXPECT_EQ(sealed(e.path()), "") << when;
+    }
+    if (e.path().filename() == "summary.json") {
+      EXPECT_EQ(bytes(e.path()).back(), '\n') << e.path() << " " << when;
+    }
   }
   EXPECT_EQ(temporaries(dir), std::vector<std::string>{}) << when;
 }
@@ -162,7 +166,7 @@ int fill_and_free(SmallDisk& disk, const std::vector<std::string>& a, const fs::
   int failures = 0;
   for (std::size_t free_bytes = first_free;; free_bytes *= 4) {
     disk.leave_free(free_bytes);
-    const Run r = run(a, root());
+    const Outcome r = run(a, root());
     if (r.code == 0) {
       std::printf("  %s: done with %zu kB free after %d full-disk failure(s)\n", a.front().c_str(), free_bytes / 1024, failures);
       break;
@@ -190,7 +194,7 @@ TEST(Chaos, TwentyRandomKillsOfTheOfflineJobEndInTheDatabaseOfAnUninterruptedRun
   fs::remove_all(dir);
   fs::create_directories(dir);
   const auto t0 = std::chrono::steady_clock::now();
-  const Run reference = run(args("offline", dir / "reference"), dir);
+  const Outcome reference = run(args("offline", dir / "reference"), dir);
   ASSERT_EQ(reference.code, 0) << reference.output;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const std::string expected = bytes(dir / "reference" / "database.h5");
@@ -213,10 +217,12 @@ TEST(Chaos, TwentyRandomKillsOfTheOfflineJobEndInTheDatabaseOfAnUninterruptedRun
     ASSERT_TRUE(code == -SIGKILL || code == 0) << bytes(dir / "killed.log");
     // Whatever the moment: a database is whole or absent, and no temporary is left (the next writer
     // of a file clears a dead writer's; here none has come yet, so only finished writes count).
-    if (fs::exists(out / "database.h5")) EXPECT_EQ(sealed(out / "database.h5"), "");
+    if (fs::exists(out / "database.h5")) {
+      EXPECT_EQ(sealed(out / "database.h5"), "");
+    }
     if (code == 0) fs::remove_all(out);  // finished: the next run starts over, so it can be killed too
   }
-  const Run last = run(args("offline", out, {"--resume"}), dir);
+  const Outcome last = run(args("offline", out, {"--resume"}), dir);
   ASSERT_EQ(last.code, 0) << last.output;
   std::printf("undisturbed run %.1f s; %d kills landed, %d runs had finished before theirs\n", seconds, killed, finished);
   EXPECT_GE(killed, 10);
@@ -243,7 +249,9 @@ TEST(Chaos, KillingDromReduceLeavesTheModelWholeOrAbsent) {
     std::this_thread::sleep_for(std::chrono::duration<double>(when(rng)));
     ::kill(pid, SIGKILL);
     finish(pid);
-    if (fs::exists(model)) EXPECT_EQ(sealed(model), "") << "kill " << k;
+    if (fs::exists(model)) {
+      EXPECT_EQ(sealed(model), "") << "kill " << k;
+    }
   }
   ASSERT_EQ(run({"reduce", db, "--out", model.string(), "--quiet"}, dir).code, 0);
   EXPECT_TRUE(bytes(model) == bytes(dir / "reference" / "model.h5"));
@@ -258,7 +266,7 @@ TEST(DiskFull, OfflineReduceAndRunFailClearlyLeaveNothingPartialAndResumeOnceSpa
   // The undisturbed runs, on the ordinary disk.
   ASSERT_EQ(run(args("offline", dir / "offline"), dir).code, 0);
   ASSERT_EQ(run({"reduce", (dir / "offline" / "database.h5").string(), "--out", (dir / "model" / "model.h5").string(), "--quiet"}, dir).code, 0);
-  const Run reference_run = run(args("run", dir / "run"), dir);
+  const Outcome reference_run = run(args("run", dir / "run"), dir);
   ASSERT_EQ(reference_run.code, 0) << reference_run.output;
 
   SmallDisk disk(root() / "small_disk");

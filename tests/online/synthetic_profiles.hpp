@@ -36,14 +36,14 @@ inline double reading(const reduce::LightModel& m, const Eigen::VectorXd& alpha,
   return exact(x, y, t);
 }
 
-// A profile across the feed, 30 mm behind the tool, 80 mm long, 800 points.
+// A profile across the feed, 30 mm behind the tool, 80 mm long, of `count` points (the seed's 800).
 inline std::vector<online::MeasuredPoint> profile(const reduce::LightModel& m, const Eigen::VectorXd& alpha, double t, double noise, std::mt19937& rng,
-                                   const std::function<double(double)>& offset) {
+                                                  const std::function<double(double)>& offset, int count = 800) {
   const Eigen::Vector3d tool = tool_at(m, t);
   std::normal_distribution<double> gauss(0, noise);
   std::vector<online::MeasuredPoint> pts;
-  for (int i = 0; i < 800; ++i) {
-    const double x = tool.x() - 30, y = tool.y() - 40 + 80.0 * i / 799;
+  for (int i = 0; i < count; ++i) {
+    const double x = tool.x() - 30, y = tool.y() - 40 + 80.0 * i / (count - 1);
     const double z = reading(m, alpha, x, y, t, offset);
     pts.push_back({x, y, std::isnan(z) ? z : z + (noise > 0 ? gauss(rng) : 0)});
   }
