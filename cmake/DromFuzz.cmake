@@ -4,7 +4,8 @@
 if(NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")
   message(FATAL_ERROR "DROM_FUZZ needs clang (libFuzzer): CC=clang CXX=clang++ cmake -DDROM_FUZZ=ON ... (scripts/fuzz does this)")
 endif()
-add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=all -fsanitize=fuzzer-no-link -fno-omit-frame-pointer -g)
+add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=all -fsanitize=fuzzer-no-link -fno-omit-frame-pointer -g
+                    -fsanitize-ignorelist=${CMAKE_CURRENT_LIST_DIR}/sanitizer_ignorelist.txt)
 add_link_options(-fsanitize=address,undefined)
 # An instrumented Python module would need ASan preloaded into python: not built here.
 set(DROM_PYTHON OFF CACHE BOOL "Build the drom Python module" FORCE)

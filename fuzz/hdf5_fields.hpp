@@ -43,7 +43,7 @@ inline Hdf5Content read_content(const std::filesystem::path& file) {
   if (f < 0) finding("cannot open the base file " + file.string() + " (run drom_fuzz_seeds first)");
   H5Literate(
       f, H5_INDEX_NAME, H5_ITER_INC, nullptr,
-      [](hid_t group, const char* name, const H5L_info2_t*, void* out) -> herr_t {
+      [](hid_t group, const char* name, const H5L_info_t*, void* out) -> herr_t {
         auto& content = *static_cast<Hdf5Content*>(out);
         const hid_t set = H5Dopen2(group, name, H5P_DEFAULT);
         const hid_t space = H5Dget_space(set), type = H5Dget_type(set);

@@ -110,7 +110,13 @@ int main(int argc, char** argv) {
       put(corpus / "case_overrides" / (std::string(name) + "_quick"), joined(written.run_quick));
       const cases::Case c = cases::load_case(file, written.run_quick);
       const offline::PartModel part = offline::build_part(c);
-      put(corpus / "gcode" / (std::string(name) + ".nc"), levelset::write_gcode(offline::build_toolpath(c, part), c.name));
+      // The program's first 40 lines (its header, a plunge, arcs where it has them): a whole program is
+      // tens of kB, and a small seed fuzzes faster.
+      std::istringstream program(levelset::write_gcode(offline::build_toolpath(c, part), c.name));
+      std::string head;
+      int lines = 0;
+      for (std::string line; lines < 40 && std::getline(program, line); ++lines) head += line + "\n";
+      put(corpus / "gcode" / (std::string(name) + ".nc"), head + "M30\n");
       put(corpus / "stress_table" / (std::string(name) + ".csv"), stress_table(part.profile, part.shape.thickness()));
       put(corpus / "stress_table" / (std::string(name) + "_truth.csv"), stress_table(part.truth_profile, part.shape.thickness()));
       const auto box = box_triangles(c.length_x, c.length_y, c.thickness);
@@ -118,6 +124,7 @@ int main(int argc, char** argv) {
       put(corpus / "stl" / (std::string(name) + "_binary.stl"), binary_stl(box));
     }
     put(corpus / "case_overrides" / "docs", "sensor.noise=0\nrun.scale=seed\nmesh.nx=20\nmesh.ny=20\nclamps.0.box=[0,100,0,100]\ncontrol.correct=false\n");
+    put(corpus / "gcode" / "arcs_inch.nc", "G20 G90 G17\nG0 X0 Y0 Z0.2\nG1 Z-0.05 F20\nG2 X1 Y1 I1 J0\nG3 X0 Y2 R1\nG91 G1 X-0.5\nG90 G43 H2 G0 Z1\nG49 M30\n");
     put(corpus / "deviation_case" / "deviation.toml", file_text(kCases / "deviation.toml"));
     std::ostringstream surface;
     surface << "x,y,z\n";

@@ -14,14 +14,6 @@ namespace drom::levelset {
 
 namespace {
 
-// A byte for a message: itself if printable, else its code.
-std::string printable(char c) {
-  if (std::isprint(static_cast<unsigned char>(c))) return "'" + std::string(1, c) + "'";
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "byte 0x%02x", static_cast<unsigned>(static_cast<unsigned char>(c)));
-  return buf;
-}
-
 constexpr double kLargest = 1e6;
 
 struct Modal {
@@ -67,7 +59,7 @@ Toolpath parse_gcode(const std::string& text, const std::string& origin) {
         ++i;
         continue;
       }
-      if (!std::isalpha(static_cast<unsigned char>(c))) throw InputError(where + "expected a word letter, got " + printable(line[i]));
+      if (!std::isalpha(static_cast<unsigned char>(c))) throw InputError(where + "expected a word letter, got '" + printable(std::string(1, line[i])) + "'");
       ++i;
       while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
       // The number in place (no copy of the rest of the line: a long line would cost its square).
@@ -75,16 +67,16 @@ Toolpath parse_gcode(const std::string& text, const std::string& origin) {
       const char* begin = line.c_str() + i;
       char* end = nullptr;
       const double value = std::strtod(begin, &end);
-      const std::string text(begin, static_cast<std::size_t>(end - begin));
+      const std::string number(begin, static_cast<std::size_t>(end - begin));
       if (end == begin) throw InputError(where + "word '" + std::string(1, c) + "' has no number");
-      if (!std::isfinite(value) || text.find_first_not_of("+-.0123456789eE") != std::string::npos)
-        throw InputError(where + "word '" + std::string(1, c) + "' has '" + text + "', not a finite decimal number");
+      if (!std::isfinite(value) || number.find_first_not_of("+-.0123456789eE") != std::string::npos)
+        throw InputError(where + "word '" + std::string(1, c) + "' has '" + number + "', not a finite decimal number");
       i += static_cast<std::size_t>(end - begin);
       // Words that name a code or a register take whole numbers of a few digits (G one decimal).
       auto code = [&](double scale, double max) {
         const double v = value * scale;
         if (v < 0 || v > max || std::abs(v - std::round(v)) > 1e-6 * scale)
-          throw InputError(where + "word '" + std::string(1, c) + text + "' is not a code drom knows");
+          throw InputError(where + "word '" + std::string(1, c) + number + "' is not a code drom knows");
         return static_cast<int>(std::lround(v));
       };
       switch (c) {
@@ -101,7 +93,7 @@ Toolpath parse_gcode(const std::string& text, const std::string& origin) {
           if (words.count(c)) throw InputError(where + "word " + std::string(1, c) + " appears twice");
           // A kilometre (or 10^6 mm/min) is beyond any machine: such a number is a corrupted program,
           // and squaring it (arcs) must stay finite.
-          if (std::abs(value) > kLargest) throw InputError(where + "word " + std::string(1, c) + text + " is beyond any machine (|value| <= 1e6)");
+          if (std::abs(value) > kLargest) throw InputError(where + "word " + std::string(1, c) + number + " is beyond any machine (|value| <= 1e6)");
           words[c] = value;
           break;
         default: throw InputError(where + "unsupported word '" + std::string(1, c) + "'");

@@ -12,6 +12,16 @@
 namespace drom {
 
 namespace {
+
+// Before main, before any HDF5 call: no library shutdown at exit, and no error stack on stderr (drom
+// says what failed). A file whose close failed (a full disk) stays in libhdf5's tables, and its
+// shutdown then closes it again and crashes (libhdf5 1.10.8: SIGSEGV in H5F__close_cb). drom closes
+// every file it opens, so the shutdown has nothing else to do.
+[[maybe_unused]] const bool hdf5_quiet_and_no_atexit = [] {
+  H5dont_atexit();
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  return true;
+}();
 // errno says why a write failed (a full disk: ENOSPC); HDF5's own stack is switched off (hdf5_reader.cpp).
 void check(herr_t status, const std::string& what) {
   if (status < 0) throw std::runtime_error("HDF5: cannot " + what + (errno != 0 ? std::string(": ") + std::strerror(errno) : std::string()));
@@ -35,9 +45,9 @@ void write_dataset(hid_t file, const std::string& name, const void* data, hid_t 
   }
   errno = 0;
   const hid_t set = H5Dcreate2(file, name.c_str(), type, space, H5P_DEFAULT, props, H5P_DEFAULT);
-  const herr_t written = set < 0 ? -1 : H5Dwrite(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
-  const int error = errno;
-  if (set >= 0) H5Dclose(set);
+  herr_t written = set < 0 ? -1 : H5Dwrite(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
+  int error = errno;
+  if (set >= 0 && H5Dclose(set) < 0 && written >= 0) written = -1, error = errno;  // the chunk cache is flushed here
   H5Pclose(props);
   H5Sclose(space);
   errno = error;
