@@ -49,13 +49,13 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   out.database = db_path;
   out.case_name = h5.text_attribute("case_name");
   SnapshotDatabase db;
-  db.B1 = read_matrix(h5, "B1");
-  db.station_times = read_matrix(h5, "station_time");
-  const Eigen::MatrixXd B2 = read_matrix(h5, "B2"), xyz = read_matrix(h5, "node_coordinates");
-  const Eigen::MatrixXd pocket = read_matrix(h5, "pocket");
+  db.B1 = read_finite_matrix(h5, "B1");
+  db.station_times = read_finite_matrix(h5, "station_time");
+  const Eigen::MatrixXd B2 = read_finite_matrix(h5, "B2"), xyz = read_finite_matrix(h5, "node_coordinates");
+  const Eigen::MatrixXd pocket = read_finite_matrix(h5, "pocket");
   if (xyz.cols() != 3) throw InputError(db_path.string() + ": node_coordinates: 3 columns expected");
   if (pocket.size() != 5) throw InputError(db_path.string() + ": pocket: x_min, y_min, length_x, length_y, depth expected");
-  const std::vector<int> target = as_indices(read_matrix(h5, "target_nodes"), xyz.rows(), db_path, "target_nodes");
+  const std::vector<int> target = as_indices(read_finite_matrix(h5, "target_nodes"), xyz.rows(), db_path, "target_nodes");
   const auto nt = target.size();
   if (nt == 0 || db.B1.rows() != static_cast<Eigen::Index>(nt) * db.station_times.size())
     throw InputError(db_path.string() + ": B1 has " + std::to_string(db.B1.rows()) + " rows, expected stations x target nodes");
@@ -67,9 +67,9 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
 
   // 1. Surfaces: the target, and the final part's (its B2 rows are the final shape).
   LightModel& model = out.model;
-  model.target = surface(xyz, target, read_matrix(h5, "target_faces"), db_path, "target surface");
-  const std::vector<int> shape = as_indices(read_matrix(h5, "shape_nodes"), xyz.rows(), db_path, "shape_nodes");
-  const SurfaceMesh shape_surface = surface(xyz, shape, read_matrix(h5, "shape_faces"), db_path, "final part");
+  model.target = surface(xyz, target, read_finite_matrix(h5, "target_faces"), db_path, "target surface");
+  const std::vector<int> shape = as_indices(read_finite_matrix(h5, "shape_nodes"), xyz.rows(), db_path, "shape_nodes");
+  const SurfaceMesh shape_surface = surface(xyz, shape, read_finite_matrix(h5, "shape_faces"), db_path, "final part");
   model.shape_nodes = shape_surface.nodes();
   model.shape_faces = shape_surface.faces();
   model.shape_face_nodes = shape_surface.nodes_per_face();
@@ -81,8 +81,8 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   std::vector<int> top;
   if (options.top_margin >= 0) {
     if (!h5.has("B1_top")) throw InputError(db_path.string() + ": no B1_top; run drom offline again for --top-margin");
-    const Eigen::MatrixXd B1_top = read_matrix(h5, "B1_top"), uvt = read_matrix(h5, "top_parametric");
-    const std::vector<int> top_ids = as_indices(read_matrix(h5, "top_nodes"), xyz.rows(), db_path, "top_nodes");
+    const Eigen::MatrixXd B1_top = read_finite_matrix(h5, "B1_top"), uvt = read_finite_matrix(h5, "top_parametric");
+    const std::vector<int> top_ids = as_indices(read_finite_matrix(h5, "top_nodes"), xyz.rows(), db_path, "top_nodes");
     const auto ntop = static_cast<Eigen::Index>(top_ids.size());
     const Eigen::Index ns = db.station_times.size();
     if (ntop == 0 || B1_top.rows() != ntop * ns || B1_top.cols() != db.B1.cols() || uvt.rows() != ntop)
@@ -100,7 +100,7 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
     for (Eigen::Index j = 0; j < kept; ++j)
       for (Eigen::Index s = 0; s < ns; ++s) db.B1_top.row(s * kept + j) = B1_top.row(s * ntop + rows[static_cast<std::size_t>(j)]);
     // The top's faces: those of the stock's top face whose nodes all lie within the margin.
-    const Eigen::MatrixXd top_faces = read_matrix(h5, "top_faces");
+    const Eigen::MatrixXd top_faces = read_finite_matrix(h5, "top_faces");
     std::vector<int> local(static_cast<std::size_t>(ntop), -1);
     for (Eigen::Index j = 0; j < kept; ++j) local[static_cast<std::size_t>(rows[static_cast<std::size_t>(j)])] = static_cast<int>(j);
     std::vector<Eigen::Index> keep_faces;
@@ -119,8 +119,8 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   out.top_nodes = top.size();
 
   // 3. Path, tool, and when each target node was cut.
-  const Eigen::MatrixXd cutting = read_matrix(h5, "path_cutting");
-  model.path = read_matrix(h5, "path_waypoints");
+  const Eigen::MatrixXd cutting = read_finite_matrix(h5, "path_cutting");
+  model.path = read_finite_matrix(h5, "path_waypoints");
   if (model.path.cols() != 4 || cutting.rows() != model.path.rows() || model.path.rows() < 2 || !model.path.allFinite())
     throw InputError(db_path.string() + ": path_waypoints / path_cutting: rows of x, y, z, t and one flag per row expected");
   std::vector<char> cut(static_cast<std::size_t>(cutting.rows()));
@@ -149,7 +149,7 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   settings.tolerance = options.tolerance;
   settings.history_tolerance = options.history_tolerance >= 0 ? options.history_tolerance : 0.5 * options.tolerance;
   // The case's coefficients in the database's column order, when they are its columns' profile.
-  const Eigen::VectorXd case_coefficients = h5.has("case_coefficients") ? Eigen::VectorXd(read_matrix(h5, "case_coefficients").reshaped()) : Eigen::VectorXd();
+  const Eigen::VectorXd case_coefficients = h5.has("case_coefficients") ? Eigen::VectorXd(read_finite_matrix(h5, "case_coefficients").reshaped()) : Eigen::VectorXd();
   const bool case_columns = case_coefficients.size() > 0 && case_coefficients.size() == db.B1.cols();
   const double largest = case_coefficients.size() > 0 ? case_coefficients.cwiseAbs().maxCoeff() : 0.0;
   settings.profile_scale = options.profile_scale > 0 ? options.profile_scale : (largest > 0 ? largest : 50.0);

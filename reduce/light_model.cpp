@@ -1,6 +1,7 @@
 #include "reduce/light_model.hpp"
 
 #include "support/file_format.hpp"
+#include "support/hdf5_eigen.hpp"
 #include "support/hdf5_reader.hpp"
 #include "support/hdf5_writer.hpp"
 #include "support/input_error.hpp"
@@ -32,14 +33,32 @@ void put_single(Hdf5Writer& h5, const std::string& name, const Eigen::MatrixXd& 
 
 std::vector<double> as_doubles(const std::vector<int>& v) { return {v.begin(), v.end()}; }
 
-Eigen::MatrixXd get(const Hdf5Reader& h5, const std::string& name) {
-  const Hdf5Matrix m = h5.matrix(name);
-  return Eigen::Map<const RowMajor>(m.data.data(), static_cast<Eigen::Index>(m.rows), static_cast<Eigen::Index>(m.cols));
+Eigen::MatrixXd get(const Hdf5Reader& h5, const std::string& name) { return read_finite_matrix(h5, name); }
+
+// Indices and counts are stored as numbers: each must be whole and within [min, max] before it is an int.
+int whole(const Hdf5Reader& h5, const std::string& name, double v, int min, int max) {
+  if (!(v >= min && v <= max && v == std::floor(v)))
+    throw InputError(h5.path().string() + ": " + name + " is " + std::to_string(v) + ", expected a whole number in [" + std::to_string(min) + ", " +
+                     std::to_string(max) + "]");
+  return static_cast<int>(v);
+}
+
+int count(const Hdf5Reader& h5, const std::string& attribute, int min, int max) { return whole(h5, attribute, h5.number_attribute(attribute), min, max); }
+
+// A length or a bound: finite, and > 0 (or >= 0 when `zero_too`).
+double measure(const Hdf5Reader& h5, const std::string& attribute, bool zero_too = true) {
+  const double v = h5.number_attribute(attribute);
+  if (!std::isfinite(v) || v < 0 || (!zero_too && v == 0))
+    throw InputError(h5.path().string() + ": " + attribute + " is " + std::to_string(v) + ", expected a finite number " + (zero_too ? ">= 0" : "> 0"));
+  return v;
 }
 
 std::vector<int> indices(const Hdf5Reader& h5, const std::string& name) {
   const Hdf5Matrix a = h5.matrix(name);
-  return {a.data.begin(), a.data.end()};
+  std::vector<int> out;
+  out.reserve(a.data.size());
+  for (double v : a.data) out.push_back(whole(h5, "an index in " + name, v, 0, std::numeric_limits<int>::max()));
+  return out;
 }
 
 // A surface the model carries over time (the target, the stock's top): `<name>_nodes`, `<name>_faces`
@@ -63,7 +82,7 @@ template <class Fail>
 void get_surface(const Hdf5Reader& h5, const std::string& name, const std::string& histories, int rank, const Eigen::VectorXd& times, const Fail& fail,
                  SurfaceMesh& mesh, Eigen::VectorXd& cut_time, std::vector<SpaceTimeField>& modes) {
   try {
-    mesh = SurfaceMesh(get(h5, name + "_nodes").transpose(), indices(h5, name + "_faces"), static_cast<int>(h5.number_attribute(name + "_face_nodes")));
+    mesh = SurfaceMesh(get(h5, name + "_nodes").transpose(), indices(h5, name + "_faces"), count(h5, name + "_face_nodes", 1, 27));
   } catch (const std::invalid_argument& e) {
     throw fail(name + " surface: " + e.what());
   }
@@ -132,17 +151,17 @@ LightModel LightModel::read(const std::filesystem::path& file) {
   LightModel m;
   m.case_toml = h5.text_attribute("case");
   m.database_hash = h5.text_attribute("database_hash");
-  const int r = static_cast<int>(h5.number_attribute("rank"));
-  m.profile_scale = h5.number_attribute("profile_scale_mpa");
-  m.tolerance = h5.number_attribute("tolerance_mm");
-  m.history_tolerance = h5.number_attribute("history_tolerance_mm");
-  m.pod_max_bound = h5.number_attribute("pod_max_bound_mm");
-  m.pod_euclidean_bound = h5.number_attribute("pod_euclidean_bound_mm");
-  m.history_bound = h5.number_attribute("history_bound_mm");
+  const int r = count(h5, "rank", 0, 100000);
+  m.profile_scale = measure(h5, "profile_scale_mpa", false);
+  m.tolerance = measure(h5, "tolerance_mm");
+  m.history_tolerance = measure(h5, "history_tolerance_mm");
+  m.pod_max_bound = measure(h5, "pod_max_bound_mm");
+  m.pod_euclidean_bound = measure(h5, "pod_euclidean_bound_mm");
+  m.history_bound = measure(h5, "history_bound_mm");
   m.tool_shape = h5.text_attribute("tool_shape") == "ball" ? ToolShape::Ball : ToolShape::Flat;
-  m.tool_radius = h5.number_attribute("tool_radius_mm");
-  m.pocket_depth = h5.number_attribute("pocket_depth_mm");
-  m.shape_face_nodes = static_cast<int>(h5.number_attribute("shape_face_nodes"));
+  m.tool_radius = measure(h5, "tool_radius_mm", false);
+  m.pocket_depth = measure(h5, "pocket_depth_mm", false);
+  m.shape_face_nodes = count(h5, "shape_face_nodes", 1, 27);
   m.singular_values = get(h5, "singular_values");
   m.right = get(h5, "right");
   m.prior_sd = get(h5, "prior_sd");
@@ -159,8 +178,8 @@ LightModel LightModel::read(const std::filesystem::path& file) {
   const Eigen::VectorXd times = r > 0 ? Eigen::VectorXd(get(h5, "history_times")) : Eigen::VectorXd();
   get_surface(h5, "target", "history", r, times, fail, m.target, m.target_cut_time, m.histories);
   if (h5.has("top_nodes")) {
-    m.top_history_bound = h5.number_attribute("top_history_bound_mm");
-    m.top_error_bound = h5.number_attribute("top_error_bound_mm");
+    m.top_history_bound = measure(h5, "top_history_bound_mm");
+    m.top_error_bound = measure(h5, "top_error_bound_mm");
     get_surface(h5, "top", "top_history", r, times, fail, m.top, m.top_cut_time, m.top_histories);
   }
   m.shape_nodes = get(h5, "shape_nodes").transpose();

@@ -103,6 +103,8 @@ void check_seal(const std::filesystem::path& path) {
                        " bytes: written by a drom before format version 3, or by another program; write it again with this drom");
     throw InputError(where + "not a file drom wrote (expected '" + std::string(kMagic, sizeof kMagic - 2) + "' at byte 0)");
   }
+  if (size < kSealBytes)
+    throw InputError(where + "truncated: " + std::to_string(size) + " bytes, not even its " + std::to_string(kSealBytes) + "-byte seal");
   // The seal's text: the magic, the length, the segment length and 32 CRCs, then zeros.
   Seal s;
   const std::string text(head.data(), std::find(head.begin(), head.end(), '\0'));

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,7 @@
 #include <random>
 #include <string>
 
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -118,7 +120,7 @@ TEST(FileSeal, TruncatedExtendedUnsealedAndForeignFilesAreRefusedSayingWhy) {
             std::string::npos)
       << refusal(dir / "cut.h5");
   put_bytes(dir / "seal_only.h5", good.substr(0, 100));
-  EXPECT_NE(refusal(dir / "seal_only.h5").find("truncated: 100 bytes"), std::string::npos) << refusal(dir / "seal_only.h5");
+  EXPECT_NE(refusal(dir / "seal_only.h5").find("truncated: 100 bytes, not even its 512-byte seal"), std::string::npos) << refusal(dir / "seal_only.h5");
   put_bytes(dir / "longer.h5", good + "tail");
   EXPECT_NE(refusal(dir / "longer.h5").find("bytes from " + std::to_string(good.size()) + " on were added"), std::string::npos) << refusal(dir / "longer.h5");
   std::string unsealed = good;
@@ -138,10 +140,11 @@ TEST(FileSeal, TruncatedExtendedUnsealedAndForeignFilesAreRefusedSayingWhy) {
 TEST(AtomicFile, ATemporaryOfAWriterThatDiedIsRemovedByTheNextWriter) {
   const auto dir = fresh_dir("atomic_stale");
   // A child writes its temporary and dies before committing (as under SIGKILL); another is still
-  // writing (it waits on a pipe).
+  // writing (it waits on a pipe, and dies with this test if the test ends first).
   auto writer = [&](int wait_fd) {
     const pid_t child = ::fork();
     if (child == 0) {
+      ::prctl(PR_SET_PDEATHSIG, SIGKILL);
       AtomicFile f(dir / "result.csv");
       std::ofstream(f.temporary_path()) << "half";
       char c;
@@ -153,16 +156,17 @@ TEST(AtomicFile, ATemporaryOfAWriterThatDiedIsRemovedByTheNextWriter) {
   const pid_t dead = writer(-1);
   int status = 0;
   ::waitpid(dead, &status, 0);
+  const auto stale = dir / (".result.tmp" + std::to_string(dead) + ".csv");
+  EXPECT_TRUE(std::filesystem::exists(stale));
   int pipe_fds[2];
   ASSERT_EQ(::pipe(pipe_fds), 0);
   const pid_t alive = writer(pipe_fds[0]);
-  const auto stale = dir / (".result.tmp" + std::to_string(dead) + ".csv"), live = dir / (".result.tmp" + std::to_string(alive) + ".csv");
+  const auto live = dir / (".result.tmp" + std::to_string(alive) + ".csv");
   for (int i = 0; i < 500 && !std::filesystem::exists(live); ++i) ::usleep(10000);
-  ASSERT_TRUE(std::filesystem::exists(stale));
-  ASSERT_TRUE(std::filesystem::exists(live));
-  write_file_atomically(dir / "result.csv", "done\n");
-  EXPECT_FALSE(std::filesystem::exists(stale));
   EXPECT_TRUE(std::filesystem::exists(live));
+  EXPECT_FALSE(std::filesystem::exists(stale)) << "the live writer, the next one, should have removed it";
+  write_file_atomically(dir / "result.csv", "done\n");
+  EXPECT_TRUE(std::filesystem::exists(live)) << "a live writer's temporary was removed";
   EXPECT_EQ(bytes_of(dir / "result.csv"), "done\n");
   (void)!::write(pipe_fds[1], "x", 1);
   ::waitpid(alive, &status, 0);
