@@ -246,7 +246,7 @@ TEST(Chaos, KillingDromReduceLeavesTheModelWholeOrAbsent) {
   std::mt19937 rng(28);
   std::uniform_real_distribution<double> when(0.02 * seconds, 1.1 * seconds);
   const auto model = dir / "killed" / "model.h5";
-  for (int k = 0; k < 10; ++k) {
+  for (int k = 0; k < 6; ++k) {
     const pid_t pid = spawn({"reduce", db, "--out", model.string(), "--quiet"}, dir / "killed.log");
     std::this_thread::sleep_for(std::chrono::duration<double>(when(rng)));
     ::kill(pid, SIGKILL);
