@@ -43,7 +43,7 @@ nlohmann::json loop_json(const online::ClosedLoopResult& r) {
           {"rejected", {{"profiles_glitch", r.rejections.glitch}, {"profiles_stuck", r.rejections.stuck}, {"profiles_empty", r.rejections.empty},
                         {"profiles_out_of_order", r.rejections.out_of_order}, {"profiles_repeated", r.rejections.repeated},
                         {"profiles_non_finite", r.rejections.non_finite}, {"fit_in_doubt", r.rejections.unlearned},
-                        {"doubts_resolved", r.rejections.doubts_sensor},
+                        {"doubts_resolved", r.rejections.doubts_resolved},
                         {"offsets_clamped", r.rejections.offsets_clamped}, {"offsets_late", r.rejections.offsets_late}}},
           {"offset_bound_mm", r.offset_bound},
           {"calibration_bias", {{"sampled_points", r.calibration.points}, {"rms_bias_mm", r.calibration.rms_bias},

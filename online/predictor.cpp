@@ -419,7 +419,7 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
     if (off) return reject(rejections_.glitch, "off the trusted fit while it is in doubt");
     kept_ += share();
     if (agree_trusted_ < settings_.learning_window) return report;
-    ++rejections_.doubts_sensor;
+    ++rejections_.doubts_resolved;
     normal_ += kept_.normal;
     rhs_ += kept_.rhs;
     points_ += kept_.points;

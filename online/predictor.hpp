@@ -89,7 +89,7 @@ struct Rejections {
   long long empty = 0;         // profiles with no usable point
   long long glitch = 0;        // profiles as a whole off a learned fit
   long long unlearned = 0;     // times a run of glitch_run glitches put the fit in doubt (no offset until resolved)
-  long long doubts_sensor = 0; // doubts resolved: the trusted fit predicted the stream again, the run left no trace
+  long long doubts_resolved = 0; // doubts resolved: the trusted fit predicted the stream again, the run left no trace
   long long offsets_non_finite = 0;  // record_offset calls with a non-finite time or offset
   long long offsets_late = 0;        // record_offset calls older than the last offset recorded (taken, in their place)
   long long offsets_clamped = 0;     // tool_offset calls whose target passed max_offset

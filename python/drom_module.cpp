@@ -207,7 +207,7 @@ PYBIND11_MODULE(drom, m) {
             const online::Rejections r = p.rejections();
             py::dict d;
             d["non_finite"] = r.non_finite, d["out_of_order"] = r.out_of_order, d["repeated"] = r.repeated, d["stuck"] = r.stuck, d["empty"] = r.empty;
-            d["glitch"] = r.glitch, d["unlearned"] = r.unlearned, d["doubts_resolved"] = r.doubts_sensor, d["offsets_non_finite"] = r.offsets_non_finite, d["offsets_late"] = r.offsets_late;
+            d["glitch"] = r.glitch, d["unlearned"] = r.unlearned, d["doubts_resolved"] = r.doubts_resolved, d["offsets_non_finite"] = r.offsets_non_finite, d["offsets_late"] = r.offsets_late;
             d["offsets_clamped"] = r.offsets_clamped;
             return d;
           },

@@ -220,11 +220,11 @@ TEST(HostileStream, AGlitchBurstPutsTheFitInDoubtAndLeavesNoTraceOnceTheSensorIs
   const auto r = p.rejections();
   const double after = last_pass_offset_error(m, p, kAlpha), reference = last_pass_offset_error(m, clean, kAlpha);
   std::printf("0.3 mm burst of 30 profiles from profile %zu: %lld glitches, %lld doubt(s), %lld resolved; last pass offset error %.5f mm (clean run %.5f mm)\n",
-              start, r.glitch, r.unlearned, r.doubts_sensor, after, reference);
+              start, r.glitch, r.unlearned, r.doubts_resolved, after, reference);
   EXPECT_GE(r.glitch, 25);  // 20 to the doubt, most of the 10 more while in it (a profile with under 10 points is not judged)
   EXPECT_LE(r.glitch, 30);
   EXPECT_EQ(r.unlearned, 1);
-  EXPECT_EQ(r.doubts_sensor, 1);
+  EXPECT_EQ(r.doubts_resolved, 1);
   EXPECT_TRUE(p.learned());
   EXPECT_FALSE(rose_in_doubt);
   // No trace: what the fit lacks is only the burst's 30 profiles' information, not their 0.3 mm.
@@ -248,7 +248,7 @@ TEST(HostileStream, ASensorThatStaysOffIsNeverFittedNorCorrectedFor) {
   ASSERT_GT(start, 0u);
   const auto r = p.rejections();
   EXPECT_EQ(r.unlearned, 1);
-  EXPECT_EQ(r.doubts_sensor, 0);
+  EXPECT_EQ(r.doubts_resolved, 0);
   EXPECT_FALSE(p.learned());
   EXPECT_EQ((p.estimate().alpha - trusted).norm(), 0.0) << "the off sensor reached the fit";
   EXPECT_EQ(offsets.back(), 0.0) << "an offset is still commanded from a fit in doubt";
