@@ -28,6 +28,12 @@ struct CommandOptions {
   // drom study
   std::string study_parameter;
   std::vector<double> study_values;
+  // drom machine (case_path holds the program)
+  std::string machine = "vmc_3axis";          // a machine file or a shipped machine's name
+  std::string reader = "auto";                 // auto, plain or rs274
+  std::vector<std::string> tool_diameters;     // "T=D" (mm), for cutter compensation read by rs274
+  std::vector<std::string> subroutine_paths;   // searched by rs274 for O<name> call
+  double sample_period = -1;                   // s between axes.csv rows
 };
 
 int run_command(const CommandOptions& options);    // drom run
@@ -40,5 +46,6 @@ int offline_command(const CommandOptions& options);  // drom offline
 int truth_command(const CommandOptions& options);    // drom truth
 int reduce_command(const CommandOptions& options);   // drom reduce
 int deviation_command(const CommandOptions& options);  // drom deviation
+int machine_command(const CommandOptions& options);    // drom machine
 
 }  // namespace drom::app

@@ -35,12 +35,25 @@ int main(int argc, char** argv) {
       {"deviation", "learn an unknown blank's deviation from laser profiles during the approach (seed chapter 2)", drom::app::deviation_command},
       {"mesh", "mesh the case's part and write it with its clamps to VTK", drom::app::mesh_command},
       {"check", "validate a case file and print it with every override applied", drom::app::check_command},
+      {"machine", "a program (G-code or CL data) on a machine: travel, singularities, the feed it really reaches, the limiting axes, the cycle time",
+       drom::app::machine_command},
   };
   std::vector<std::pair<CLI::App*, const Sub*>> commands;
   for (const auto& sub : subs) {
     CLI::App* cmd = app.add_subcommand(sub.name, sub.help);
     const bool reduce = std::string(sub.name) == "reduce";
-    if (reduce) {
+    if (std::string(sub.name) == "machine") {
+      cmd->add_option("program", case_path, "G-code (.ngc, .nc, ...) or CL data (.apt, .cl, .cls, .csv)")->required();
+      cmd->add_option("--machine", options.machine, "machine file (TOML), or a shipped machine: vmc_3axis, ucp710_like, gantry_head_ac")->capture_default_str();
+      cmd->add_option("--set", options.overrides, "override a machine value, e.g. --set setup.tool_length=80 (repeatable)")->take_all();
+      cmd->add_option("--reader", options.reader, "auto: drom's reader for the plain subset, LinuxCNC's rs274 otherwise")
+          ->capture_default_str()
+          ->check(CLI::IsMember({"auto", "plain", "rs274"}));
+      cmd->add_option("--tool-diameter", options.tool_diameters, "T=D: tool T's diameter in mm, for cutter compensation (repeatable)")->take_all();
+      cmd->add_option("--subroutine-path", options.subroutine_paths, "a folder rs274 searches for O<name> call (repeatable)")->take_all();
+      cmd->add_option("--sample-period", options.sample_period, "seconds between rows of axes.csv (default: the interpolation cycle)")
+          ->check(CLI::PositiveNumber);
+    } else if (reduce) {
       cmd->add_option("database", case_path, "database.h5 written by drom offline")->required();
       cmd->add_option("--tol", options.tolerance, "POD truncation: max-norm error bound, mm (seed eq. 2.9)")->capture_default_str()->check(CLI::PositiveNumber);
       cmd->add_option("--history-tol", options.history_tolerance, "space-time compression of all basis histories together, mm (default: --tol / 2)")
@@ -59,6 +72,7 @@ int main(int argc, char** argv) {
       cmd->add_option("case", case_path, "case file (TOML); see cases/ and docs/case-files.md");
       cmd->add_option("--set", options.overrides, "override a case value, e.g. --set mesh.nx=20 (repeatable)")->take_all();
     }
+    if (std::string(sub.name) == "machine") options.out = "out/machine";
     cmd->add_option("--out", options.out, reduce ? "model file (.h5), or a folder for model.h5" : "output folder")->capture_default_str();
     cmd->add_flag("--quiet", options.quiet, "no progress or table, only files");
     if (std::string(sub.name) == "study") {

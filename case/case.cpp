@@ -211,6 +211,9 @@ void read_closed_loop(TomlReader& r, Case& c) {
   c.sensor_seed = static_cast<std::uint32_t>(r.integer("sensor.seed", 0, 4294967295LL, c.sensor_seed));
   c.desync = r.real("sync.desync", Range::closed(0, 60), c.desync);
   c.feed_override = r.real("sync.feed_override", Range::open(0, 10), c.feed_override);
+  c.sync_machine = r.text("sync.machine", c.sync_machine);
+  if (c.sync_machine.size() > 5 && c.sync_machine.ends_with(".toml")) c.sync_machine = relative_to(r.origin(), c.sync_machine).string();
+  c.sync_reckoning = r.choice("sync.reckoning", {"machine", "programmed"}, c.sync_reckoning);
   c.correct = r.boolean("control.correct", c.correct);
   c.refresh_rate = r.real("control.refresh_rate", Range::closed(0.01, 10000), c.refresh_rate);
   c.max_offset_rate = r.real("control.max_offset_rate", Range::positive(), c.max_offset_rate);

@@ -95,8 +95,10 @@ struct Case {
   double sensor_angle_error = 0;
   std::uint32_t sensor_seed = 2015;
 
-  // [sync]: how the predictor knows where the tool is.
+  // [sync]: how the machine moves and how the predictor knows where the tool is.
   double desync = 0, feed_override = 1;
+  std::string sync_machine = "vmc_3axis";  // the machine whose real feed the loop's tool follows (file or shipped name); empty: the programmed feed
+  std::string sync_reckoning = "machine";  // between edges the synchronizer reckons with that machine's motion, or at the "programmed" feed
 
   // [control]: the predictor and the offsets it commands.
   bool correct = true;

@@ -1,7 +1,8 @@
 #pragma once
-// ISO 6983 G-code, the subset 3-axis pocketing needs: G0/G1/G2/G3 in G17, G90/G91, G20/G21, F,
-// N line numbers, ( ) and ; comments, G43 Hn / G49 tool length offsets (kept as data), and the
-// harmless T, S, M words. Anything else is an error naming the line.
+// A 3-axis pocket program read by machine/'s reader: drom's fast reader for the plain subset, the
+// whole RS274/NGC language through LinuxCNC's rs274 otherwise (machine/program_reader.hpp). Arcs in
+// XY stay arcs; arcs in XZ and YZ become chords within 1 µm. Rotary words and a first move that cuts
+// from an unknown position are errors naming the line, as is anything the interpreter refuses.
 #include "levelset/toolpath.hpp"
 
 #include <string>

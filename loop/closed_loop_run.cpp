@@ -52,6 +52,22 @@ nlohmann::json loop_json(const online::ClosedLoopResult& r) {
           {"seconds", r.seconds}};
 }
 
+// How the machine moved and how well the synchronizer followed it: the real against the programmed
+// time, and the believed position's error as run and as a programmed-feed reckoning would have had it.
+nlohmann::json sync_json(const cases::Case& c, const online::ClosedLoopSettings& s, const online::ClosedLoopResult& r) {
+  auto errors = [](const online::SyncError& e) {
+    return nlohmann::json{{"max_program_time_error_s", e.max_time}, {"max_shift_mm", e.max_shift}, {"rms_shift_mm", e.rms_shift}, {"steps_on_floor", e.samples}};
+  };
+  nlohmann::json j{{"desync_s", c.desync}, {"feed_override", c.feed_override}, {"machine", c.sync_machine.empty() ? "none: the programmed feed" : c.sync_machine},
+                   {"reckoning", c.sync_machine.empty() ? "programmed" : c.sync_reckoning}, {"believed_position", errors(r.sync)},
+                   {"believed_position_if_reckoning_at_the_programmed_feed", errors(r.sync_programmed_feed)}};
+  if (s.machine_motion) {
+    j["program_time_s"] = s.machine_motion->program_duration();
+    j["real_time_s"] = s.machine_motion->real_duration();
+  }
+  return j;
+}
+
 }  // namespace
 
 RunResult run_closed_loop(const cases::Case& c, const RunOptions& options) {
@@ -60,7 +76,7 @@ RunResult run_closed_loop(const cases::Case& c, const RunOptions& options) {
   const ClosedLoopInputs in = prepare_closed_loop(c, options);
 
   // The two loops share everything but the correction; each has its own copy of the truth.
-  online::ClosedLoopSettings with = loop_settings(c), without = with;
+  online::ClosedLoopSettings with = loop_settings(c, in.model), without = with;
   with.correct = true;
   without.correct = false;
   const online::ClosedLoop corrected_loop(in.model, predictor_settings(c, in.model), with), uncorrected_loop(in.model, predictor_settings(c, in.model), without);
@@ -92,7 +108,7 @@ RunResult run_closed_loop(const cases::Case& c, const RunOptions& options) {
                  {"max_abs_target_w_mm", in.truth.target_history.cwiseAbs().maxCoeff()}}},
       {"sensor", {{"noise_mm", c.sensor_noise}, {"period_s", c.sensor_period}, {"angle_deg", c.sensor_angle}, {"offset_mm", c.sensor_offset},
                   {"offset_error_mm", c.sensor_offset_error}, {"angle_error_deg", c.sensor_angle_error}}},
-      {"sync", {{"desync_s", c.desync}, {"feed_override", c.feed_override}}},
+      {"sync", sync_json(c, with, corrected)},
       {"control", {{"refresh_rate_hz", c.refresh_rate}, {"max_offset_rate_mm_s", c.max_offset_rate}, {"learning_tolerance_mm", c.learning_tolerance}}},
       {"corrected", loop_json(corrected)},
       {"uncorrected", loop_json(uncorrected)},

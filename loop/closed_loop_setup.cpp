@@ -1,5 +1,7 @@
 #include "loop/closed_loop_setup.hpp"
 
+#include "machine/program_clock.hpp"
+
 #include "support/toml_reader.hpp"
 #include "offline/part_setup.hpp"
 #include "support/atomic_file.hpp"
@@ -210,8 +212,14 @@ online::PredictorSettings predictor_settings(const cases::Case& c, const reduce:
   return s;
 }
 
-online::ClosedLoopSettings loop_settings(const cases::Case& c) {
+online::ClosedLoopSettings loop_settings(const cases::Case& c, const reduce::LightModel& model) {
   online::ClosedLoopSettings s;
+  if (!c.sync_machine.empty()) {
+    const machine::Machine m = machine::load_machine(c.sync_machine);
+    s.machine_motion = std::make_shared<const machine::ProgramClock>(model.path, m, c.feed_override);
+    if (c.sync_reckoning == "machine")
+      s.reckoning_motion = c.feed_override == 1 ? s.machine_motion : std::make_shared<const machine::ProgramClock>(model.path, m, 1.0);
+  }
   s.sheet.offset = Eigen::Vector3d(c.sensor_offset[0], c.sensor_offset[1], c.sensor_offset[2]);
   s.sheet.angle_deg = c.sensor_angle;
   s.sheet.length = c.sensor_length;

@@ -58,6 +58,8 @@ ClosedLoopInputs prepare_closed_loop(const cases::Case& c, const RunOptions& opt
 // The measurement sigma is the sensor's noise and the model's own error bound together: a noise-free
 // sensor still sees what the model cannot represent, and the band should say so.
 online::PredictorSettings predictor_settings(const cases::Case& c, const reduce::LightModel& model);
-online::ClosedLoopSettings loop_settings(const cases::Case& c);
+// The loop's settings; the machine's real motion along the model's path ([sync] machine) is
+// predicted here (machine/program_clock.hpp).
+online::ClosedLoopSettings loop_settings(const cases::Case& c, const reduce::LightModel& model);
 
 }  // namespace drom::loop

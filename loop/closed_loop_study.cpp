@@ -73,7 +73,7 @@ nlohmann::json run_study(const cases::Case& base, const std::string& parameter_n
     cases::Case c = base;
     parameter.apply(c, value);
     const double factor = parameter_name == "amplitude" ? value : 1.0;
-    online::ClosedLoopSettings with = loop_settings(c), without = with;
+    online::ClosedLoopSettings with = loop_settings(c, in.model), without = with;
     with.correct = true;
     without.correct = false;
     const online::ClosedLoop corrected_loop(in.model, predictor_settings(c, in.model), with), uncorrected_loop(in.model, predictor_settings(c, in.model), without);

@@ -28,6 +28,15 @@ std::vector<Pass> floor_passes(const reduce::LightModel& model) {
   return passes;
 }
 
+void SyncError::add(double time_error, double shift) {
+  ++samples;
+  max_time = std::max(max_time, std::abs(time_error));
+  max_shift = std::max(max_shift, shift);
+  rms_shift += shift * shift;
+}
+
+void SyncError::finish() { rms_shift = samples > 0 ? std::sqrt(rms_shift / static_cast<double>(samples)) : 0.0; }
+
 ClosedLoop::ClosedLoop(const reduce::LightModel& model, PredictorSettings predictor, ClosedLoopSettings settings)
     : model_(model), predictor_settings_(predictor), settings_(std::move(settings)), passes_(floor_passes(model)) {
   if (!(settings_.period > 0) || !(settings_.refresh_rate > 0) || !(settings_.feed_override > 0) || !(settings_.desync >= 0))
@@ -71,7 +80,8 @@ LoopMachine::LoopMachine(const reduce::LightModel& model, const TruePart& truth,
   sync_ = settings_.sync;
   if (sync_.empty())
     for (Eigen::Index i = 0; i < model.path.rows(); ++i) sync_.push_back(static_cast<int>(i));
-  reckoning_ = std::make_unique<DeadReckoning>(model.path, sync_);
+  reckoning_ = std::make_unique<DeadReckoning>(model.path, sync_, settings_.reckoning_motion);
+  programmed_reckoning_ = std::make_unique<DeadReckoning>(model.path, sync_);
   floor_ = std::make_unique<MachinedFloor>(model);
   // One step is the shorter of the two periods; the longer is a whole number of steps.
   const double refresh = 1 / settings_.refresh_rate;
@@ -79,22 +89,34 @@ LoopMachine::LoopMachine(const reduce::LightModel& model, const TruePart& truth,
   scan_every_ = std::max(1L, std::lround(settings_.period / step_));
   refresh_every_ = std::max(1L, std::lround(refresh / step_));
   const double program_end = model.path(model.path.rows() - 1, 3);
-  steps_ = static_cast<long>(std::ceil(program_end / settings_.feed_override / step_)) + 1;
+  steps_ = static_cast<long>(std::ceil(clock_at(program_end) / step_)) + 1;
   calibrating_ = settings_.errors.offset_error.head<2>().norm() > 0 || settings_.errors.angle_error_deg != 0;
 }
 
+double LoopMachine::clock_at(double program_time) const {
+  if (settings_.machine_motion) return settings_.machine_motion->real_time(program_time);
+  return program_time / settings_.feed_override;
+}
+
+double LoopMachine::program_time_at(double clock) const {
+  if (settings_.machine_motion) return settings_.machine_motion->program_time(clock);
+  return std::min(model_.path(model_.path.rows() - 1, 3), clock * settings_.feed_override);
+}
+
 LoopMachine::Step LoopMachine::advance(long k) {
-  const double program_end = model_.path(model_.path.rows() - 1, 3);
   Step s;
   s.index = k;
   s.clock = static_cast<double>(k) * step_;
-  s.true_time = std::min(program_end, s.clock * settings_.feed_override);
-  while (next_edge_ < sync_.size() && model_.path(sync_[next_edge_], 3) / settings_.feed_override + settings_.desync <= s.clock) {
-    reckoning_->edge(sync_[next_edge_], model_.path(sync_[next_edge_], 3) / settings_.feed_override + settings_.desync);
+  s.true_time = program_time_at(s.clock);
+  while (next_edge_ < sync_.size() && clock_at(model_.path(sync_[next_edge_], 3)) + settings_.desync <= s.clock) {
+    const double at = clock_at(model_.path(sync_[next_edge_], 3)) + settings_.desync;
+    reckoning_->edge(sync_[next_edge_], at);
+    programmed_reckoning_->edge(sync_[next_edge_], at);
     ++next_edge_;
   }
   s.tip = path_position(model_.path, s.true_time);
   s.believed_time = reckoning_->program_time(s.clock);
+  s.programmed_feed_time = programmed_reckoning_->program_time(s.clock);
   s.believed_tip = reckoning_->position_at_program_time(s.believed_time);
   s.pass = pass_of(passes_, s.true_time);
 
@@ -197,7 +219,12 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
   for (long k = 0; k <= steps; ++k) {
     const LoopMachine::Step step = machine.advance(k);
 
-    // 1. The cut, and its error against the target where it truly is.
+    // 1. The cut, and its error against the target where it truly is; where the synchronizer thinks it is.
+    if (step.pass > 0) {
+      result.sync.add(step.believed_time - step.true_time, (step.believed_tip - step.tip).norm());
+      result.sync_programmed_feed.add(step.programmed_feed_time - step.true_time,
+                                      (path_position(model_.path, step.programmed_feed_time) - step.tip).norm());
+    }
     if (step.on_target) {
       LoopSample s = step.sample;
       s.offset_sd = predictor.predicted_offset_sd(step.true_time);
@@ -255,6 +282,8 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
   result.calibration = machine.calibration();
   result.rejections = predictor.rejections();
   result.offset_bound = predictor.max_offset();
+  result.sync.finish();
+  result.sync_programmed_feed.finish();
   result.estimate = predictor.estimate();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

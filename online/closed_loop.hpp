@@ -3,10 +3,13 @@
 // offset the predictor commands, a laser sheet on its spindle reads the floor it has cut as the part
 // distorts, the predictor learns from the readings, and the part is the truth run's.
 //
-// Clocks. The machine runs in clock time at feed_override x the programmed feed, so it is at program
-// time t_true = feed_override * clock. The predictor only knows the controller's waypoint edges, late
-// by `desync`, and dead-reckons the program time t_believed in between: the sensor's points are placed,
-// and offsets are computed, for the believed time.
+// Clocks. Without a machine model the machine runs in clock time at feed_override x the programmed
+// feed, so it is at program time t_true = feed_override * clock. With one (machine_motion), it moves
+// as the machine's kinematic model predicts (machine/feed_prediction.hpp: slower into corners and at
+// the ends of passes), and t_true is the program time of the point it has reached. The predictor only
+// knows the controller's waypoint edges, late by `desync`, and dead-reckons the program time
+// t_believed in between, at the programmed feed or with `reckoning_motion`: the sensor's points are
+// placed, and offsets are computed, for the believed time.
 //
 // Each step (the smaller of the sensor period and the offset refresh interval):
 //   1. the tool, where it truly is, cuts at its commanded altitude (programmed z + applied offset);
@@ -62,6 +65,20 @@ struct ClosedLoopSettings {
   std::vector<int> sync;       // waypoints raising an edge; empty: every waypoint
   bool correct = true;         // false: the offsets stay 0 (the predictor still learns)
   std::uint32_t seed = 2015;   // the sensor noise's
+  // The machine's real motion along the model's path (at feed_override); null: the programmed feed.
+  std::shared_ptr<const machine::ProgramClock> machine_motion;
+  // The synchronizer's model of that motion between edges (it does not know the override); null:
+  // the programmed feed.
+  std::shared_ptr<const machine::ProgramClock> reckoning_motion;
+};
+
+// How far the synchronizer's believed position lay from the tool's, over the steps on the floor: the
+// program time error, and the shift along the path it amounts to (the seed's feed x Δt, §2.3.4).
+struct SyncError {
+  long long samples = 0;
+  double max_time = 0, max_shift = 0, rms_shift = 0;  // s of program time, mm
+  void add(double time_error, double shift);
+  void finish();
 };
 
 // A pass: a stretch of program time with the tool on the floor (on the target surface, at depth).
@@ -120,6 +137,8 @@ struct ClosedLoopResult {
   double offset_bound = 0;         // mm: the bound the commanded offset was held within
   Estimate estimate;               // at the end
   CalibrationBias calibration;     // empty without calibration errors
+  SyncError sync;                  // the synchronizer's, as run
+  SyncError sync_programmed_feed;  // what a synchronizer reckoning at the programmed feed would have had
   double seconds = 0;
 };
 
@@ -140,6 +159,7 @@ class LoopMachine {
     double clock = 0;          // controller time (s)
     double true_time = 0;      // program time the tool has truly reached
     double believed_time = 0;  // program time the synchronizer believes
+    double programmed_feed_time = 0;  // what it would believe reckoning at the programmed feed
     Eigen::Vector3d tip = Eigen::Vector3d::Zero(), believed_tip = Eigen::Vector3d::Zero();
     int pass = 0;              // 1-based pass the tool is on the floor in; 0: off the floor
     bool on_target = false;    // the tool is over the target surface on a pass: `sample` holds its error
@@ -150,6 +170,9 @@ class LoopMachine {
   };
 
   long steps() const { return steps_; }  // steps 0 .. steps()
+  // The clock time at which the tool reaches program time t (true motion), and the reverse.
+  double clock_at(double program_time) const;
+  double program_time_at(double clock) const;
   // Moves to step k (in order from 0).
   Step advance(long k);
   // The offset commanded at the current step, in force from its true program time on.
@@ -169,7 +192,7 @@ class LoopMachine {
   ClosedLoopSettings settings_;
   std::vector<Pass> passes_;
   std::vector<int> sync_;
-  std::unique_ptr<DeadReckoning> reckoning_;
+  std::unique_ptr<DeadReckoning> reckoning_, programmed_reckoning_;
   std::unique_ptr<MachinedFloor> floor_;
   std::mt19937 rng_;
   double step_ = 0;

@@ -8,7 +8,8 @@
 
 namespace drom::online {
 
-DeadReckoning::DeadReckoning(Eigen::MatrixXd path, std::vector<int> sync) : path_(std::move(path)), sync_(std::move(sync)) {
+DeadReckoning::DeadReckoning(Eigen::MatrixXd path, std::vector<int> sync, std::shared_ptr<const machine::ProgramClock> motion)
+    : path_(std::move(path)), sync_(std::move(sync)), motion_(std::move(motion)) {
   if (path_.cols() != 4 || path_.rows() < 2) throw std::invalid_argument("dead reckoning: the path needs at least two waypoints (x, y, z, program time)");
   for (Eigen::Index i = 1; i < path_.rows(); ++i)
     if (!(path_(i, 3) >= path_(i - 1, 3))) throw std::invalid_argument("dead reckoning: program times must not decrease (waypoint " + std::to_string(i) + ")");
@@ -25,10 +26,14 @@ void DeadReckoning::edge(int waypoint, double clock) {
 }
 
 double DeadReckoning::program_time(double clock) const {
-  if (last_ < 0) return std::min(clock, path_(sync_.empty() ? path_.rows() - 1 : sync_.front(), 3));
+  const double first = path_(sync_.empty() ? path_.rows() - 1 : sync_.front(), 3);
+  if (last_ < 0) return std::min(motion_ ? motion_->program_time(clock) : clock, first);
   const double t0 = path_(sync_[static_cast<std::size_t>(last_)], 3);
   const double cap = static_cast<std::size_t>(last_ + 1) < sync_.size() ? path_(sync_[static_cast<std::size_t>(last_ + 1)], 3) : path_(path_.rows() - 1, 3);
-  return std::min(cap, t0 + std::max(0.0, clock - last_clock_));
+  const double since = std::max(0.0, clock - last_clock_);
+  // With a motion model: where the machine, having passed the edge's waypoint, gets in that time.
+  const double believed = motion_ ? motion_->program_time(motion_->real_time(t0) + since) : t0 + since;
+  return std::min(cap, believed);
 }
 
 Eigen::Vector3d path_position(const Eigen::MatrixXd& path, double t) {

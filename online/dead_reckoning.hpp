@@ -1,10 +1,16 @@
 #pragma once
 // Position synchronization (design.md §7; seed §2.2.5.2, fig. 2.26): the controller raises an edge
 // when the tool passes chosen waypoints; between edges the tool's progress is estimated from the last
-// edge at the programmed feed, along the programmed path, and never past the next synchronized
-// waypoint. Everything downstream (the predictor, the sensor's believed positions) works in program
-// time: the time at which the program, run at its programmed feed, reaches a point.
+// edge, along the programmed path, and never past the next synchronized waypoint: at the programmed
+// feed, or with a model of the machine's real motion (machine/program_clock.hpp: the feed it really
+// reaches, slower into corners and at the ends of passes). Everything downstream (the predictor, the
+// sensor's believed positions) works in program time: the time at which the program, run at its
+// programmed feed, reaches a point.
+#include "machine/program_clock.hpp"
+
 #include <Eigen/Core>
+
+#include <memory>
 
 #include <vector>
 
@@ -18,7 +24,8 @@ class DeadReckoning {
  public:
   // path: waypoints x, y, z, program time (increasing); sync: indices of the waypoints that raise an
   // edge (sorted).
-  DeadReckoning(Eigen::MatrixXd path, std::vector<int> sync);
+  // `motion`: the machine's predicted real motion along `path`; null: the programmed feed.
+  DeadReckoning(Eigen::MatrixXd path, std::vector<int> sync, std::shared_ptr<const machine::ProgramClock> motion = nullptr);
 
   // The controller's edge for synchronized waypoint `waypoint`, received at clock time `clock`.
   void edge(int waypoint, double clock);
@@ -33,6 +40,7 @@ class DeadReckoning {
  private:
   Eigen::MatrixXd path_;
   std::vector<int> sync_;
+  std::shared_ptr<const machine::ProgramClock> motion_;
   int last_ = -1;             // index into sync_ of the last edge
   double last_clock_ = 0;
 };

@@ -84,10 +84,13 @@ struct Machine {
 
 }  // namespace
 
+void bind_machine(py::module_& m);  // machine_bindings.cpp
+
 PYBIND11_MODULE(drom, m) {
   m.doc() = "drom: distortion-aware machining of thin parts (docs/python.md)";
   m.attr("__version__") = kVersion;
   py::register_exception<InputError>(m, "InputError", PyExc_ValueError);
+  bind_machine(m);
 
   // ---- cases -------------------------------------------------------------------------------
   py::class_<cases::Case>(m, "Case", "A case file read and validated (case/case.hpp); every key as in docs/case-files.md")
@@ -310,7 +313,7 @@ PYBIND11_MODULE(drom, m) {
       .def(py::init([](const std::shared_ptr<loop::ClosedLoopInputs>& in, const cases::Case& c) {
              auto made = std::make_unique<Machine>();
              made->truth = in->play();
-             made->machine = std::make_unique<online::LoopMachine>(in->model, made->truth.part, loop::loop_settings(c));
+             made->machine = std::make_unique<online::LoopMachine>(in->model, made->truth.part, loop::loop_settings(c, in->model));
              return made;
            }),
            py::arg("inputs"), py::arg("case"), py::keep_alive<1, 2>())

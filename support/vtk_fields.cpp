@@ -10,13 +10,61 @@
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
+#include <vtkCellArray.h>
+#include <vtkPolyData.h>
 #include <vtkUnstructuredGrid.h>
+#include <vtkXMLPolyDataWriter.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 
 #include <sstream>
 #include <stdexcept>
 
 namespace drom {
+
+void write_polylines_vtp(const std::filesystem::path& path, const Polylines& p) {
+  const auto n = static_cast<vtkIdType>(p.points.cols());
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(n);
+  for (vtkIdType i = 0; i < n; ++i) points->SetPoint(i, p.points(0, i), p.points(1, i), p.points(2, i));
+  vtkNew<vtkCellArray> lines;
+  for (const auto& line : p.lines) {
+    lines->InsertNextCell(static_cast<int>(line.size()));
+    for (long long id : line) {
+      if (id < 0 || id >= n) throw std::invalid_argument("write_polylines_vtp: a line refers to point " + std::to_string(id) + " of " + std::to_string(n));
+      lines->InsertCellPoint(static_cast<vtkIdType>(id));
+    }
+  }
+  vtkNew<vtkPolyData> poly;
+  poly->SetPoints(points);
+  poly->SetLines(lines);
+  for (const auto& [name, values] : p.fields.point_vectors) {
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(name.c_str());
+    a->SetNumberOfComponents(3);
+    a->SetNumberOfTuples(n);
+    for (vtkIdType i = 0; i < n; ++i) a->SetTuple3(i, values[3 * i], values[3 * i + 1], values[3 * i + 2]);
+    poly->GetPointData()->AddArray(a);
+  }
+  for (const auto& [name, values] : p.fields.point_scalars) {
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(name.c_str());
+    a->SetNumberOfTuples(n);
+    for (vtkIdType i = 0; i < n; ++i) a->SetValue(i, values[static_cast<std::size_t>(i)]);
+    poly->GetPointData()->AddArray(a);
+  }
+  for (const auto& [name, values] : p.fields.cell_scalars) {
+    if (values.size() != p.lines.size()) throw std::invalid_argument("write_polylines_vtp: cell field " + name + " has " + std::to_string(values.size()) + " values for " + std::to_string(p.lines.size()) + " lines");
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(name.c_str());
+    a->SetNumberOfTuples(static_cast<vtkIdType>(values.size()));
+    for (std::size_t k = 0; k < values.size(); ++k) a->SetValue(static_cast<vtkIdType>(k), values[k]);
+    poly->GetCellData()->AddArray(a);
+  }
+  vtkNew<vtkXMLPolyDataWriter> writer;
+  writer->SetInputData(poly);
+  write_vtk_xml(*writer, path);
+}
 
 // The fields on a grid whose points are the mesh's nodes and whose cells are the `kept` elements.
 void write_vtu_grid(vtkUnstructuredGrid& grid, long long node_count, const VtuFields& fields, const std::vector<int>& kept, const std::filesystem::path& path) {

@@ -28,6 +28,15 @@ void write_vtu_grid(vtkUnstructuredGrid& grid, long long node_count, const VtuFi
 void write_surface_vtu(const std::filesystem::path& path, const Eigen::Matrix3Xd& nodes, const std::vector<int>& faces, int nodes_per_face,
                        const VtuFields& fields);
 
+// Polylines (a toolpath, a set of passes) as a .vtp: points (3 x n), each line the indices of its
+// points in order; point fields have one value (or 3 for vectors) per point, cell fields one per line.
+struct Polylines {
+  Eigen::Matrix3Xd points;
+  std::vector<std::vector<long long>> lines;
+  VtuFields fields;  // point_scalars, point_vectors, cell_scalars (cell_tensors unused)
+};
+void write_polylines_vtp(const std::filesystem::path& path, const Polylines& polylines);
+
 // A .pvd collection: ParaView opens it as one time series.
 class PvdCollection {
  public:

@@ -3,6 +3,8 @@
 // figures against stored ones. The truth's distortion is physics, so it is held tightly; what the loop
 // achieves depends on the noise draws and the fit, so it is held to a factor.
 #include "drom_process.hpp"
+#include "machine/program_reader.hpp"
+#include "tests/machine/same_moves.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -56,6 +58,12 @@ inline nlohmann::json check_run(const std::string& name, const std::string& args
 
   for (const char* f : {"passes.csv", "path_samples.csv", "offsets.csv", "corrected_program.nc", "final_shape.pvd", "summary.json"})
     EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
+  // The corrected program reads back through LinuxCNC's interpreter to the moves drom's reader sees.
+  if (drom::machine::rs274_available()) {
+    using drom::machine::ReaderChoice;
+    const auto program = out / "corrected_program.nc";
+    expect_same_moves(drom::machine::read_program(program, {ReaderChoice::Plain, {}}), drom::machine::read_program(program, {ReaderChoice::Rs274, {}}));
+  }
   // passes.csv: one row per pass, and as many as the summary says.
   std::ifstream passes(out / "passes.csv");
   std::string line;

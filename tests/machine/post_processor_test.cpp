@@ -1,0 +1,136 @@
+// The post-processor's programs read back by LinuxCNC's interpreter (and by drom's fast reader) to
+// the very moves it wrote, on every shipped machine; unreachable CL data refused with its line.
+#include "machine/post_processor.hpp"
+#include "machine/program_reader.hpp"
+#include "support/input_error.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+using namespace drom;
+using namespace drom::machine;
+
+namespace {
+
+ClProgram random_cl(const Machine& m, unsigned seed, int points) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  ClProgram cl;
+  cl.origin = "random.cl";
+  Eigen::Vector3d tip = m.chain == KinematicChain::HeadHead ? Eigen::Vector3d(3000, 1500, 20) : Eigen::Vector3d(0, 0, 20);
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+  for (int i = 0; i < points; ++i) {
+    tip += (0.1 + 10 * u(rng)) * Eigen::Vector3d(u(rng) - 0.5, u(rng) - 0.5, 0.2 * (u(rng) - 0.5)).normalized();
+    tip.z() = std::clamp(tip.z(), 0.0, 40.0);
+    if (m.rotary_count() > 0) {
+      axis = (axis + 0.1 * Eigen::Vector3d(u(rng) - 0.5, u(rng) - 0.5, 0)).normalized();
+      if (axis.z() < std::cos(40 * std::numbers::pi / 180)) axis = (axis + Eigen::Vector3d(0, 0, 0.3)).normalized();
+    }
+    ClPoint p;
+    p.pose = {tip, axis};
+    p.feed = 200 + 5000 * u(rng);
+    p.rapid = i == 0 || u(rng) < 0.05;
+    p.line = i + 2;
+    cl.points.push_back(p);
+  }
+  return cl;
+}
+
+}  // namespace
+
+class PostProcessor : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(PostProcessor, LinuxCncReadsBackTheMovesWritten) {
+  if (!rs274_available()) GTEST_SKIP() << "rs274 (linuxcnc-uspace) is not installed";
+  const Machine m = load_machine(GetParam());
+  const Kinematics kin(m);
+  const ClProgram cl = random_cl(m, 42, 400);
+  const ClOnMachine on = cl_to_machine_program(cl, kin);
+  ASSERT_TRUE(on.joints.violations.empty());
+  const std::string gcode = post_process(cl, kin, {"round trip", 1, 12000, -1});
+  for (ReaderChoice reader : {ReaderChoice::Rs274, ReaderChoice::Plain}) {
+    const MachineProgram back = to_machine_program(parse_program(gcode, m.name + ".ngc", {reader, {}}), m);
+    // The written program adds its first rapid (from where the tool is) in front.
+    ASSERT_EQ(back.blocks.size(), on.program.blocks.size() + 1);
+    for (std::size_t i = 0; i < on.program.blocks.size(); ++i) {
+      const MachineBlock &a = on.program.blocks[i], &b = back.blocks[i + 1];
+      EXPECT_EQ(static_cast<int>(a.type), static_cast<int>(b.type)) << i;
+      for (int j = 0; j < m.joint_count(); ++j)
+        EXPECT_NEAR(joint_in_program_units(m, j, a.end[j]), joint_in_program_units(m, j, b.end[j]), 1e-4) << GetParam() << " block " << i << " joint " << j;
+      if (a.type == MoveType::Linear) {
+        // 3-axis feeds are per length, and the length read back carries the coordinates' 4 decimals.
+        const double length = (a.end.head<3>() - a.start.head<3>()).norm();
+        const double relative = m.rotary_count() > 0 ? 1e-5 : 2e-4 / std::max(length, 1e-3) + 1e-5;
+        EXPECT_NEAR(a.programmed_duration, b.programmed_duration, relative * a.programmed_duration) << GetParam() << " block " << i;
+      }
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Machines, PostProcessor, ::testing::Values("vmc_3axis", "ucp710_like", "gantry_head_ac"));
+
+TEST(PostProcessorErrors, UnreachableCutterLocationsNameTheirLine) {
+  const Kinematics ucp(load_machine("ucp710_like"));
+  ClProgram cl;
+  cl.origin = "part.cl";
+  cl.points.push_back({{{0, 0, 10}, {0, 0, 1}}, 0, true, 3});
+  const double tilt = 130 * std::numbers::pi / 180;  // beyond A's [-100, 120]
+  cl.points.push_back({{{5, 0, 10}, {0, std::sin(tilt), std::cos(tilt)}}, 1000, false, 4});
+  try {
+    post_process(cl, ucp);
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("part.cl:4"), std::string::npos) << m;
+    EXPECT_NE(m.find("A = "), std::string::npos) << m;
+    EXPECT_NE(m.find("stroke"), std::string::npos) << m;
+  }
+  const Kinematics vmc(load_machine("vmc_3axis"));
+  cl.points[1].pose.axis = Eigen::Vector3d(0, 0.2, 1).normalized();
+  try {
+    post_process(cl, vmc);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot be reached"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ClFiles, AptAndCsvReadTheSamePoints) {
+  const char* apt = R"(PARTNO/TEST
+UNITS/MM
+MULTAX/ON
+$$ a comment
+RAPID
+GOTO/0.000,0.000,10.000,0.0,0.0,1.0
+FEDRAT/1200.0,MMPM
+GOTO/10.000,0.000,10.000,$
+0.0,0.0,1.0
+GOTO/10.000,5.000,9.000
+FINI
+)";
+  const ClProgram a = parse_apt_cl(apt, "t.apt");
+  ASSERT_EQ(a.points.size(), 3u);
+  EXPECT_TRUE(a.points[0].rapid);
+  EXPECT_FALSE(a.points[1].rapid);
+  EXPECT_EQ(a.points[1].line, 8);
+  EXPECT_NEAR(a.points[2].feed, 1200, 1e-12);
+  const ClProgram b = parse_cl_csv(cl_csv(a), "t.csv");
+  ASSERT_EQ(b.points.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_LE((a.points[i].pose.tip - b.points[i].pose.tip).norm(), 1e-6);
+  auto message = [](const std::string& text) {
+    try {
+      parse_apt_cl(text, "bad.apt");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(message("GOTO/0,0,0\nGOTO/1,0,0\n").find("bad.apt:2"), std::string::npos);            // cutting before FEDRAT
+  EXPECT_NE(message("GOTO/0,0,0\nFEDRAT/100\nGOTO/1,0,nan\n").find("bad.apt:3"), std::string::npos);  // NaN
+  EXPECT_NE(message("GOTO/0,0,0,0,0,0\n").find("zero"), std::string::npos);
+  EXPECT_NE(message("CYCLE/DRILL,5\n").find("CYCLE"), std::string::npos);
+  EXPECT_NE(message("GOTO/0,0,$\n").find("continued"), std::string::npos);
+}

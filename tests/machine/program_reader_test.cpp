@@ -1,0 +1,162 @@
+// drom's fast reader against LinuxCNC's interpreter: the same moves where both apply, LinuxCNC's
+// sample programs read, and bad programs refused with their file and line.
+#include "machine/gcode_reader.hpp"
+#include "machine/machine_program.hpp"
+#include "machine/program_reader.hpp"
+#include "machine/rs274_reader.hpp"
+#include "support/input_error.hpp"
+#include "tests/machine/same_moves.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+using namespace drom;
+using namespace drom::machine;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path scratch(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / "drom-program-tests";
+  fs::create_directories(dir);
+  const fs::path p = dir / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+const char* kPlainProgram = R"(%
+(a plain program: every plane, helices, full circles, R arcs, inverse time, rotary words)
+G21 G90 G17 G94 G64 P0.02
+G0 X10 Y0 Z5
+G1 Z0 F600
+G2 X0 Y10 I-10 J0
+G3 X-10 Y0 R10
+G2 X-10 Y0 I10 J0 Z-1 (full circle, helical)
+G3 X0 Y-10 I10 J0 P2
+G18 G2 X10 Z-1 I5 K0 F400
+G19 G3 Y-10 Z9 J0 K5
+G17 G91 G1 X5 Y-5
+G90 G61
+G1 X20 Y20 A15 C-30 F800
+G93 G1 X25 C10 F4
+G1 X20 Z3 A0 F2.5
+G94 G61.1 G1 X0 F1000
+G4 P0.5
+G64 G1 Y0
+G20 G1 X1 Y1 F20
+M30
+%
+)";
+
+}  // namespace
+
+TEST(ProgramReader, PlainReaderAndLinuxCncAgreeOnThePlainSubset) {
+  if (!rs274_available()) GTEST_SKIP() << "rs274 (linuxcnc-uspace) is not installed";
+  const fs::path p = scratch("plain.ngc", kPlainProgram);
+  const NcProgram fast = read_program(p, {ReaderChoice::Plain, {}});
+  const NcProgram lcnc = read_program(p, {ReaderChoice::Rs274, {}});
+  EXPECT_EQ(fast.reader, "drom");
+  EXPECT_EQ(lcnc.reader, "rs274");
+  ASSERT_GT(fast.moves.size(), 15u);
+  expect_same_moves(fast, lcnc, 25.4);  // the last move is in inches
+}
+
+TEST(ProgramReader, OutsideThePlainSubsetLinuxCncReadsIt) {
+  if (!rs274_available()) GTEST_SKIP() << "rs274 (linuxcnc-uspace) is not installed";
+  const fs::path p = scratch("full.ngc", R"(G21 G90
+#<_drom_x> = 3
+G0 X0 Y0 Z5
+O100 sub
+  G1 X[#<_drom_x> * 2] F100
+O100 endsub
+O100 call
+G81 X10 Y10 Z-2 R1 F50
+G80
+G92 X0
+G1 X5
+G92.1
+M2
+)");
+  EXPECT_THROW(read_program(p, {ReaderChoice::Plain, {}}), OutsidePlainSubset);
+  const NcProgram prog = read_program(p);
+  EXPECT_EQ(prog.reader, "rs274");
+  // X6 from the subroutine, the drilling cycle's four moves, then X5 in the G92 frame is X15.
+  ASSERT_GE(prog.moves.size(), 6u);
+  EXPECT_NEAR(prog.moves[1].end[0], 6, 1e-9);
+  EXPECT_EQ(prog.moves[1].line, 5);
+  EXPECT_NEAR(prog.moves.back().end[0], 15, 1e-9);
+  EXPECT_EQ(prog.moves.back().line, 11);
+}
+
+TEST(ProgramReader, EveryMillingSampleOfLinuxCncIsRead) {
+  const fs::path samples = "/usr/share/linuxcnc/ncfiles";
+  if (!rs274_available() || !fs::exists(samples)) GTEST_SKIP() << "LinuxCNC's samples are not installed";
+  // Not programs, or not milling, or not XYZABC: each refused with the reason named. The lathe samples
+  // (XZ moves, G76 threading) are read: their moves are plain, and synchronized feeds are the pitch
+  // times the spindle speed.
+  const std::map<std::string, std::string> refused = {
+      {"increment.ngc", "program end"},    {"probe-hole.ngc", "program end"},  // subroutine files, called by others
+      {"gridprobe.ngc", "probes"},         {"smartprobe.ngc", "probes"},       {"tool-length-probe.ngc", "probe"},
+      {"x-trim.ngc", "probes"},            // touches off through the probing subroutine touchoff.ngc
+      {"nestedcall.ngc", "O-word"},        // calls its subroutine with an unknown keyword ('callsub')
+      {"cone.ngc", "'w'"},                 // moves LinuxCNC's W axis (a quill): rs274 is built for XYZABC machines, as are drom's
+  };
+  int read = 0, total = 0;
+  for (const auto& entry : fs::directory_iterator(samples)) {
+    if (entry.path().extension() != ".ngc") continue;
+    ++total;
+    const std::string name = entry.path().filename().string();
+    try {
+      const NcProgram p = read_program(entry.path());
+      EXPECT_FALSE(refused.count(name)) << name << " was read, though listed as refused";
+      ++read;
+    } catch (const InputError& e) {
+      const std::string message = e.what();
+      ASSERT_TRUE(refused.count(name)) << name << ": " << message;
+      EXPECT_NE(message.find(refused.at(name)), std::string::npos) << name << ": " << message;
+      EXPECT_NE(message.find(name), std::string::npos) << message;
+    }
+  }
+  RecordProperty("samples", total);
+  RecordProperty("read", read);
+  EXPECT_EQ(total - read, static_cast<int>(refused.size()));
+}
+
+TEST(ProgramReader, BadProgramsNameTheirLine) {
+  auto message = [](const std::string& text) {
+    try {
+      parse_program(text, "bad.ngc");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(message("G21\nG0 X0\nG1 X5\n").find("bad.ngc:3"), std::string::npos);                       // no feed
+  EXPECT_TRUE(parse_program("G21\nG1 X5 F100\n", "first.ngc").start_assumed);  // cutting first: from the origin, said
+  EXPECT_NE(message("G0 X0 Y0\nG2 X10 Y0 I3 J0 F100\n").find("inconsistent"), std::string::npos);       // radius
+  EXPECT_NE(message("G0 X0\nG1 X1 X2 F10\n").find("twice"), std::string::npos);
+  EXPECT_NE(message("G0 X0\nG93 G1 X1 F10\nG1 X2\n").find("bad.ngc:3"), std::string::npos);             // G93 without F
+  if (rs274_available()) {
+    const std::string lcnc = message("G21\nG0 X0\n#1 = [1 / 0]\nG1 X#1 F10\nM2\n");
+    EXPECT_NE(lcnc.find("bad.ngc:3"), std::string::npos) << lcnc;
+    EXPECT_NE(lcnc.find("LinuxCNC"), std::string::npos) << lcnc;
+  }
+}
+
+TEST(ProgramReader, RotaryWordsOnAThreeAxisMachineNameTheLine) {
+  const NcProgram p = parse_plain_gcode("G21 G90\nG0 X0 Y0 Z5\nG1 X10 F100\nG1 X20 A30\n", "five.ngc");
+  try {
+    to_machine_program(p, load_machine("vmc_3axis"));
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("five.ngc:4"), std::string::npos) << m;
+    EXPECT_NE(m.find("no rotary axis"), std::string::npos) << m;
+  }
+  EXPECT_NO_THROW(to_machine_program(p, load_machine("ucp710_like")));
+  EXPECT_THROW(to_machine_program(parse_plain_gcode("G0 X0\nG1 B5 F10\n", "b.ngc"), load_machine("ucp710_like")), InputError);
+}
