@@ -1,11 +1,15 @@
 // drom_fuzz_seeds <corpus folder> <base folder>: the seed corpus of every harness, made from the shipped
-// cases (cases/*.toml): the case files themselves, their quick overrides, their toolpaths as G-code,
+// cases (cases/*.toml) and machines (machines/*.toml): the case and machine files themselves, their
+// quick overrides, their toolpaths as G-code, a 5-axis CL program (APT, CSV) and its post-processed G-code,
 // their stress profiles as tables, their stock as STL, the chapter 2 blank as a measured surface,
 // and the flat plate's coarse snapshot database and light model (the base files of the *_fields
 // harnesses). Deterministic: the same tree gives the same seeds.
 #include "case/case.hpp"
 #include "fem/residual_stress.hpp"
 #include "levelset/gcode.hpp"
+#include "machine/cl_data.hpp"
+#include "machine/machine_definition.hpp"
+#include "machine/post_processor.hpp"
 #include "offline/offline_job.hpp"
 #include "offline/part_setup.hpp"
 #include "reduce/database_reduction.hpp"
@@ -26,6 +30,23 @@ using namespace drom;
 namespace {
 
 const fs::path kCases = DROM_SOURCE_DIR "/cases";
+const fs::path kMachines = DROM_SOURCE_DIR "/machines";
+
+// A 5-axis CL program: rapid, a tilted plunge, a swept tool axis, with continuations and comments.
+const char* kAptSeed = R"(PARTNO/SEED
+UNITS/MM
+MULTAX/ON
+$$ a comment
+RAPID
+GOTO/0.000,0.000,20.000,0.0,0.0,1.0
+FEDRAT/1200.0,MMPM
+GOTO/10.000,0.000,5.000,$
+0.0,0.2588190,0.9659258
+GOTO/20.000,5.000,4.000,0.1736482,0.0,0.9848078
+TLAXIS/0.0,0.0,1.0
+GOTO/30.000,5.000,4.000
+FINI
+)";
 
 void put(const fs::path& file, const std::string& bytes) { write_file_atomically(file, bytes); }
 
@@ -126,6 +147,17 @@ int main(int argc, char** argv) {
     put(corpus / "case_overrides" / "docs", "sensor.noise=0\nrun.scale=seed\nmesh.nx=20\nmesh.ny=20\nclamps.0.box=[0,100,0,100]\ncontrol.correct=false\n");
     put(corpus / "gcode" / "arcs_inch.nc", "G20 G90 G17\nG0 X0 Y0 Z0.2\nG1 Z-0.05 F20\nG2 X1 Y1 I1 J0\nG3 X0 Y2 R1\nG91 G1 X-0.5\nG90 G43 H2 G0 Z1\nG49 M30\n");
     put(corpus / "deviation_case" / "deviation.toml", file_text(kCases / "deviation.toml"));
+    put(corpus / "gcode" / "helix_planes.nc", "G21 G90 G17 G64 P0.02\nG0 X10 Y0 Z5\nG1 Z0 F600\nG3 X0 Y-10 I-10 J0 P2 Z-1\nG18 G2 X10 Z-1 I5 K0 F400\n"
+                                               "G19 G3 Y-10 Z9 J0 K5\nG61.1 G4 P0.5\nM30\n");
+    put(corpus / "gcode_rs274" / "parameters.ngc", "G21 G90\n#1 = 5\nG0 X0 Y0 Z[#1 * 2]\no100 repeat [3]\n  G91 G1 X#1 F300\no100 endrepeat\nG90 G2 X0 Y0 I-5 J0\nM2\n");
+    put(corpus / "gcode_rs274" / "arcs_inch.nc", file_text(corpus / "gcode" / "arcs_inch.nc"));
+    for (const auto& machine_file : fs::directory_iterator(kMachines))
+      if (machine_file.path().extension() == ".toml") put(corpus / "machine_file" / machine_file.path().filename(), file_text(machine_file.path()));
+    const machine::ClProgram cl = machine::parse_apt_cl(kAptSeed, "seed.apt");
+    put(corpus / "cl_file" / "five_axis.apt", kAptSeed);
+    put(corpus / "cl_file" / "five_axis.csv", machine::cl_csv(cl));
+    const machine::Kinematics five_axis(machine::load_machine("ucp710_like"));
+    put(corpus / "gcode" / "five_axis_post.nc", machine::post_process(cl, five_axis));
     std::ostringstream surface;
     surface << "x,y,z\n";
     for (int i = 0; i <= 5; ++i)
