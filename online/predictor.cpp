@@ -502,7 +502,7 @@ double Predictor::predicted_offset(double t) const {
   const auto snap = snapshot();
   if (!snap->learned || sample_time_.size() == 0) return 0;
   const auto [j, a] = reduce::locate_time(sample_time_, t);
-  if (sample_time_.size() == 1) return sample_inside_[0] ? sample_w_.row(0).dot(snap->alpha) : 0.0;
+  if (sample_time_.size() == 1) return sample_inside_[0] != 0 ? sample_w_.row(0).dot(snap->alpha) : 0.0;
   auto at = [&](Eigen::Index i) {
     if (sample_inside_[i] == 0) return 0.0;
     const double w = sample_w_.row(i).dot(snap->alpha);

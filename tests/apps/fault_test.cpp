@@ -282,6 +282,46 @@ TEST(DiskFull, OfflineAndReduceFailClearlyLeaveNothingPartialAndResumeOnceSpaceI
   fs::remove_all(dir);
 }
 
+// The outputs of drom run that a resumed or repeated run must write byte for byte.
+const char* const kRunOutputs[] = {"passes.csv", "offsets.csv", "path_samples.csv", "corrected_program.nc", "offline/database.h5", "truth/database.h5", "model/model.h5"};
+
+// Not in the default suite (label "faults": drom run takes minutes): ctest -L faults.
+TEST(Chaos, KillingDromRunLeavesNothingPartialAndTheNextRunWritesTheSameOutputs) {
+  if (std::getenv("DROM_FAULTS_LONG") == nullptr) GTEST_SKIP() << "set DROM_FAULTS_LONG=1 (ctest -L faults does)";
+  const auto dir = root() / "chaos_run";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const auto t0 = std::chrono::steady_clock::now();
+  const Outcome reference = run(args("run", dir / "reference"), dir);
+  ASSERT_EQ(reference.code, 0) << reference.output;
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> when(0.02 * seconds, 1.0 * seconds);
+  const auto out = dir / "killed";
+  int killed = 0;
+  for (int k = 0; k < 8; ++k) {
+    const pid_t pid = spawn(args("run", out), dir / "killed.log");
+    const double delay = when(rng);
+    std::this_thread::sleep_for(std::chrono::duration<double>(delay));
+    ::kill(pid, SIGKILL);
+    const int code = finish(pid);
+    killed += code == -SIGKILL;
+    std::printf("kill %d of drom run at %.1f s: %s\n", k + 1, delay, code == -SIGKILL ? "killed" : code == 0 ? "had finished" : "failed");
+    ASSERT_TRUE(code == -SIGKILL || code == 0) << bytes(dir / "killed.log");
+    for (const char* f : {"offline/database.h5", "truth/database.h5", "model/model.h5"})
+      if (fs::exists(out / f)) {
+        EXPECT_EQ(sealed(out / f), "") << f << " after kill " << k + 1;
+      }
+  }
+  const Outcome last = run(args("run", out), dir);
+  ASSERT_EQ(last.code, 0) << last.output;
+  std::printf("undisturbed drom run %.1f s; %d kills landed\n", seconds, killed);
+  EXPECT_GE(killed, 4);
+  for (const char* f : kRunOutputs) EXPECT_TRUE(bytes(out / f) == bytes(dir / "reference" / f)) << f << " differs from the undisturbed run's";
+  EXPECT_EQ(temporaries(out), std::vector<std::string>{});
+  fs::remove_all(dir);
+}
+
 // Not in the default suite (label "faults": a few minutes of drom run): ctest -L faults.
 TEST(DiskFull, DromRunFailsClearlyAndResumesToTheSameOutputs) {
   if (std::getenv("DROM_FAULTS_LONG") == nullptr) GTEST_SKIP() << "set DROM_FAULTS_LONG=1 (ctest -L faults does)";
@@ -295,7 +335,7 @@ TEST(DiskFull, DromRunFailsClearlyAndResumesToTheSameOutputs) {
   const auto small = disk.path();
   std::printf("drom run:\n");
   EXPECT_GE(fill_and_free(disk, args("run", small / "run"), small / "run", 8 << 10), 3);
-  for (const char* f : {"passes.csv", "offsets.csv", "path_samples.csv", "corrected_program.nc", "offline/database.h5", "truth/database.h5", "model/model.h5"})
+  for (const char* f : kRunOutputs)
     EXPECT_TRUE(bytes(small / "run" / f) == bytes(dir / "run" / f)) << f << " differs from the undisturbed run's";
   fs::remove_all(dir);
 }
