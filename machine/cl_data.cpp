@@ -145,7 +145,10 @@ ClProgram parse_cl_csv(const std::string& text, const std::string& origin) {
     const auto cells = split(line, ',');
     const std::string where = origin + ":" + std::to_string(line_no) + ": ";
     if (column.empty()) {
-      for (std::size_t c = 0; c < cells.size(); ++c) column[cells[c]] = c;
+      // A column named twice would leave column.size() short of the header's cells (a fuzz finding: a
+      // short row was then read past its end).
+      for (std::size_t c = 0; c < cells.size(); ++c)
+        if (!column.emplace(cells[c], c).second) throw InputError(where + "the CL table's header names column '" + printable(cells[c]) + "' twice");
       for (const char* need : {"x", "y", "z", "i", "j", "k", "feed"})
         if (!column.count(need)) throw InputError(where + "the CL table's header needs the columns x, y, z, i, j, k, feed; '" + need + "' is missing");
       continue;
