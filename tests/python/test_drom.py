@@ -150,7 +150,8 @@ def test_a_model_of_another_format_version_or_truncated_is_refused(coarse_job):
     shutil.copy(folder / "model.h5", edited)
     with h5py.File(edited, "r+") as f:
         f.attrs["format_version"] = 4.0
-    with pytest.raises(drom.InputError, match="damaged: bytes .* differ from what drom wrote"):
+    # h5py may rewrite the attribute in place or append it: either way the seal refuses the file.
+    with pytest.raises(drom.InputError, match="differ from what drom wrote|were added after it was written"):
         drom.LightModel.read(str(edited))
 
 
