@@ -14,6 +14,7 @@ struct CommandOptions {
   std::filesystem::path out = "out";
   bool quiet = false;
   // drom offline / truth
+  bool replan = false;   // drom run: a finishing pass re-planned on the predicted final shape
   bool resume = false;   // continue an interrupted run in --out
   int stop_after = -1;   // solve at most this many stations in this invocation, then stop (batch, tests)
   int threads = 0;       // 0: one per hardware thread
@@ -34,6 +35,10 @@ struct CommandOptions {
   std::vector<std::string> tool_diameters;     // "T=D" (mm), for cutter compensation read by rs274
   std::vector<std::string> subroutine_paths;   // searched by rs274 for O<name> call
   double sample_period = -1;                   // s between axes.csv rows
+  // drom copy (case_path holds the cloud)
+  std::optional<std::filesystem::path> settings;  // the settings file; none: the defaults
+  std::string tool;                               // the finishing tool; empty: the settings'
+  std::string copy_machine;                       // empty: the settings'
 };
 
 int run_command(const CommandOptions& options);    // drom run
@@ -47,5 +52,8 @@ int truth_command(const CommandOptions& options);    // drom truth
 int reduce_command(const CommandOptions& options);   // drom reduce
 int deviation_command(const CommandOptions& options);  // drom deviation
 int machine_command(const CommandOptions& options);    // drom machine
+int copy_command(const CommandOptions& options);       // drom copy
+int finish_command(const CommandOptions& options);     // drom finish
+int orient_command(const CommandOptions& options);     // drom orient
 
 }  // namespace drom::app

@@ -33,6 +33,12 @@ int main(int argc, char** argv) {
       {"truth", "simulate the machining for the case's own stress profile, with full fields", drom::app::truth_command},
       {"reduce", "compress an offline database into the light model the online predictor loads", drom::app::reduce_command},
       {"deviation", "learn an unknown blank's deviation from laser profiles during the approach (seed chapter 2)", drom::app::deviation_command},
+      {"copy", "copy a scanned part from its point cloud by 3+2 machining: normals, visibility, packets, roughing and finishing per packet, G-code",
+       drom::app::copy_command},
+      {"finish", "finishing paths on a free-form surface in the least time under a scallop bound (zoning, tool choice, 3-axis or 3+2)",
+       drom::app::finish_command},
+      {"orient", "collision-free 5-axis tool axis along fixed CL paths from repulsive fields (seed 000), proved by a clearance check and put on a machine",
+       drom::app::orient_command},
       {"mesh", "mesh the case's part and write it with its clamps to VTK", drom::app::mesh_command},
       {"check", "validate a case file and print it with every override applied", drom::app::check_command},
       {"machine", "a program (G-code or CL data) on a machine: travel, singularities, the feed it really reaches, the limiting axes, the cycle time",
@@ -53,6 +59,12 @@ int main(int argc, char** argv) {
       cmd->add_option("--subroutine-path", options.subroutine_paths, "a folder rs274 searches for O<name> call (repeatable)")->take_all();
       cmd->add_option("--sample-period", options.sample_period, "seconds between rows of axes.csv (default: the interpolation cycle)")
           ->check(CLI::PositiveNumber);
+    } else if (std::string(sub.name) == "copy") {
+      cmd->add_option("cloud", case_path, "the scanned cloud: XYZ/CSV (x y z [nx ny nz]) or PLY (ascii or binary)")->required();
+      cmd->add_option("--settings", options.settings, "settings file (TOML; docs/case-files.md, \"drom copy\"); default: the seed's hip run");
+      cmd->add_option("--tool", options.tool, "finishing tool: ball:D, torus:D:r or flat:D (mm); default: the settings' (ball:6)");
+      cmd->add_option("--machine", options.copy_machine, "machine file (TOML) or shipped machine; default: the settings' (ucp710_like)");
+      cmd->add_option("--set", options.overrides, "override a setting, e.g. --set packets.coverage=0.9 (repeatable)")->take_all();
     } else if (reduce) {
       cmd->add_option("database", case_path, "database.h5 written by drom offline")->required();
       cmd->add_option("--tol", options.tolerance, "POD truncation: max-norm error bound, mm (seed eq. 2.9)")->capture_default_str()->check(CLI::PositiveNumber);
@@ -73,12 +85,17 @@ int main(int argc, char** argv) {
       cmd->add_option("--set", options.overrides, "override a case value, e.g. --set mesh.nx=20 (repeatable)")->take_all();
     }
     if (std::string(sub.name) == "machine") options.out = "out/machine";
+    if (std::string(sub.name) == "copy") options.out = "out/copy";
     cmd->add_option("--out", options.out, reduce ? "model file (.h5), or a folder for model.h5" : "output folder")->capture_default_str();
     cmd->add_flag("--quiet", options.quiet, "no progress or table, only files");
     if (std::string(sub.name) == "study") {
       cmd->add_option("--param", options.study_parameter, "the parameter: noise, angle, refresh, calibration, desync, amplitude or seed (the noise draw)")->required();
       cmd->add_option("--values", options.study_values, "its values, e.g. --values 0,0.02,0.05")->required()->delimiter(',');
     }
+    if (std::string(sub.name) == "run")
+      cmd->add_flag("--replan", options.replan, "re-plan a finishing pass on the predicted final shape, sampled as a cloud, and report its distance to the truth");
+    if (std::string(sub.name) == "finish")
+      cmd->add_option("--threads", options.threads, "K values optimised at once (default: one per hardware thread)")->check(CLI::PositiveNumber);
     if (std::string(sub.name) == "offline" || std::string(sub.name) == "truth") {
       cmd->add_flag("--resume", options.resume, "continue the interrupted run in --out (refuses a different case)");
       cmd->add_option("--stop-after", options.stop_after, "solve at most N stations in this invocation, then stop (resume later)")->check(CLI::NonNegativeNumber);

@@ -9,6 +9,10 @@
 // Stages 2-3 are kept under --out and reused while the case that made them is unchanged, so a rerun
 // with other sensor or control settings costs only the loop.
 #include "loop/closed_loop_run.hpp"
+#include "loop/replanned_finish.hpp"
+#include "machine/cl_data.hpp"
+#include "paths/cloud_path.hpp"
+#include "support/atomic_file.hpp"
 
 #include "support/summary.hpp"
 #include "support/resources.hpp"
@@ -91,6 +95,26 @@ RunResult run_closed_loop(const cases::Case& c, const RunOptions& options) {
   if (!options.quiet) std::fprintf(stderr, "\r  100 %%\n");
 
   auto files = write_loop_outputs(options.out, c, in.model, truth_a.part, corrected, uncorrected);
+  // The finishing pass re-planned on the predicted final shape, judged against the truth's.
+  nlohmann::json replan;
+  if (options.replan && !corrected.shapes.empty()) {
+    if (!options.quiet) std::cerr << "drom run: the finishing pass re-planned on the predicted final shape\n";
+    const ReplannedFinish r = replan_finish(corrected.shapes.back(), in.truth.final_displacement);
+    const machine::ClProgram cl = paths::to_cl_program(r.replanned.path, Eigen::Matrix3d::Identity(), 1000, "drom run --replan");
+    write_file_atomically(options.out / "replanned_finish_cl.csv", machine::cl_csv(cl));
+    files.push_back("replanned_finish_cl.csv");
+    replan = {{"cloud_points", r.cloud_points},
+              {"upward_faces", r.faces},
+              {"tool", "ball D10"},
+              {"passes", r.replanned.passes},
+              {"path_points", r.replanned.path.size()},
+              {"gaps", r.replanned.gaps},
+              {"cut_nodes_judged", r.judged},
+              {"max_distance_to_truth_mm", r.max_error},
+              {"rms_distance_to_truth_mm", r.rms_error},
+              {"nominal_max_distance_to_truth_mm", r.nominal_max_error},
+              {"nominal_rms_distance_to_truth_mm", r.nominal_rms_error}};
+  }
   files.push_back("summary.json");
   const Headline h = headline(corrected, uncorrected, c.shape_pass);
   nlohmann::json summary = {
@@ -119,6 +143,7 @@ RunResult run_closed_loop(const cases::Case& c, const RunOptions& options) {
       {"peak_memory_mb", static_cast<double>(peak_memory_bytes()) / 1048576.0},
       {"machine", machine_info()},
       {"files", files}};
+  if (!replan.is_null()) summary["replanned_finish"] = replan;
   write_summary(options.out, summary);
   RunResult result;
   result.headline = h;

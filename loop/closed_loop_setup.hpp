@@ -24,6 +24,7 @@ struct RunOptions {
   std::filesystem::path out = "out";  // offline/, truth/ and model/ are kept here and reused
   bool quiet = false;                 // no progress on stderr
   int threads = 0;                    // the offline job's workers; 0: one per hardware thread
+  bool replan = false;                // re-plan a finishing pass on the predicted final shape (loop/replanned_finish.hpp)
 };
 
 // The truth run, as the closed loop plays it.

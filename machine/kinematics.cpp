@@ -1,9 +1,11 @@
 #include "machine/kinematics.hpp"
 
 #include <Eigen/Geometry>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <numbers>
@@ -14,7 +16,8 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-Eigen::Vector3d rotate(const Eigen::Vector3d& k, double c, double s, const Eigen::Vector3d& x) {
+// Inlined by force: it is the inner loop of every pose (a call per rotation cost 10 % of a path's IK).
+[[gnu::always_inline]] inline Eigen::Vector3d rotate(const Eigen::Vector3d& k, double c, double s, const Eigen::Vector3d& x) {
   return x * c + k.cross(x) * s + k * (k.dot(x) * (1 - c));
 }
 Eigen::Vector3d rotate(const Eigen::Vector3d& k, double angle, const Eigen::Vector3d& x) { return rotate(k, std::cos(angle), std::sin(angle), x); }
@@ -170,7 +173,7 @@ IkBranches Kinematics::inverse(const ClPose& pose, double free_angle) const {
 double Kinematics::singularity_distance(const Eigen::Vector3d& axis) const {
   if (machine_.chain == KinematicChain::ThreeAxis) return kPi / 2;
   const Eigen::Vector3d& k = v_is_tool_axis_ ? k2_ : k1_;
-  const double c = std::min(1.0, std::abs(k.dot(axis.normalized())));
+  const double c = std::min(1.0, std::abs(k.dot(axis)) / axis.norm());
   double d = std::acos(c);
   // The fixed vector e_z along the other axis is a singularity of every pose (a head axis that is vertical).
   const Eigen::Vector3d& other = v_is_tool_axis_ ? k1_ : k2_;
@@ -281,25 +284,45 @@ JointPath inverse_path(const Kinematics& kin, std::span<const ClPose> poses, con
   path.joints.resize(n);
   path.branch.assign(n, 0);
   path.singularity_distance.resize(n);
-  // 1. Each pose's two solutions, before trigonometry (in parallel).
-  std::vector<BranchSplit> splits(n);
-  tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
-    splits[i] = kin.split(poses[i]);
-    path.singularity_distance[i] = kin.singularity_distance(poses[i].axis);
+  // What each pose's subproblem gave, in a byte: its status, and which of its branches continues each
+  // branch of the pose before (the one whose c moves least). Computed in parallel; following the branch
+  // along the path is then a walk over bits. (Keeping each pose's BranchSplit, 56 bytes, cost more in
+  // first touches of memory than recomputing the few needed again.)
+  enum : std::uint8_t { kOutOfReach = 0, kRegular = 1, kSingular = 2, kStatusMask = 3, kFromBranch0 = 4, kFromBranch1 = 8 };
+  std::vector<std::uint8_t> status(n);
+  auto status_of = [](const BranchSplit& sp) -> std::uint8_t { return sp.count == 0 ? kOutOfReach : sp.singular ? kSingular : kRegular; };
+  auto nearest = [](const BranchSplit& sp, const Eigen::Vector3d& c) { return sp.count == 2 && (sp.c[1] - c).squaredNorm() < (sp.c[0] - c).squaredNorm() ? 1 : 0; };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
+    BranchSplit before = r.begin() > 0 ? kin.split(poses[r.begin() - 1]) : BranchSplit{};
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      const BranchSplit sp = kin.split(poses[i]);
+      std::uint8_t bits = status_of(sp);
+      if (sp.count > 0 && before.count > 0)
+        bits |= static_cast<std::uint8_t>((nearest(sp, before.c[0]) ? kFromBranch0 : 0) | (nearest(sp, before.c[1]) ? kFromBranch1 : 0));
+      status[i] = bits;
+      before = sp;
+    }
   });
-  // 2. The continuous branch from pose `from` on, given the previous pose's c: the one whose c moves least.
-  auto follow = [&](std::size_t from, Eigen::Vector3d c) {
+  // 1. The continuous branch from pose `from` on, given the c of the reachable pose before it. Past an
+  // unreachable pose the branch is weighed against the last reachable one's c again.
+  auto follow = [&](std::size_t from, const Eigen::Vector3d& c_from) {
+    std::size_t last = n;  // the last reachable pose walked, n: none yet (then c_from)
     for (std::size_t i = from; i < n; ++i) {
-      const BranchSplit& sp = splits[i];
-      if (sp.count == 0) continue;
-      path.branch[i] = sp.count == 2 && (sp.c[1] - c).squaredNorm() < (sp.c[0] - c).squaredNorm() ? 1 : 0;
-      c = sp.c[static_cast<std::size_t>(path.branch[i])];
+      if ((status[i] & kStatusMask) == kOutOfReach) continue;
+      if (last != n && last == i - 1) {
+        path.branch[i] = (status[i] & (path.branch[last] ? kFromBranch1 : kFromBranch0)) ? 1 : 0;
+      } else {
+        const Eigen::Vector3d c = last == n ? c_from : kin.split(poses[last]).c[static_cast<std::size_t>(path.branch[last])];
+        path.branch[i] = nearest(kin.split(poses[i]), c);
+      }
+      last = i;
     }
   };
-  // 3. That branch's joints (in parallel).
+  // 2. That branch's joints (in parallel), and each pose's distance to the singularity.
   auto solve = [&](std::size_t from) {
     tbb::parallel_for(from, n, [&](std::size_t i) {
-      if (splits[i].count > 0 && !splits[i].singular) path.joints[i] = kin.solve_branch(poses[i], splits[i], path.branch[i]);
+      if ((status[i] & kStatusMask) == kRegular) path.joints[i] = kin.solve_branch(poses[i], kin.split(poses[i]), path.branch[i]);
+      path.singularity_distance[i] = kin.singularity_distance(poses[i].axis);
     });
   };
   bool have_previous = start != nullptr;
@@ -310,13 +333,14 @@ JointPath inverse_path(const Kinematics& kin, std::span<const ClPose> poses, con
     follow(0, sp.c[0]);
   } else if (n > 0) {
     // The first pose: both branches weighed; the path follows from the one taken.
+    const BranchSplit sp = kin.split(poses[0]);
     const IkBranches s = kin.inverse(poses[0]);
     if (s.count > 0) {
       Choice c = choose(kin, 0, s, previous, false);
       path.branch[0] = c.branch;
-      follow(1, splits[0].c[static_cast<std::size_t>(c.branch)]);
+      follow(1, sp.c[static_cast<std::size_t>(c.branch)]);
     } else {
-      follow(1, splits[0].c[0]);
+      follow(1, sp.c[0]);
     }
     first = 0;
   }
@@ -325,9 +349,8 @@ JointPath inverse_path(const Kinematics& kin, std::span<const ClPose> poses, con
   // weigh both branches; when that changes the branch, the rest of the path follows the new one.
   const int free_joint = m.chain == KinematicChain::TableTable ? 4 : 3;  // free at the singularity: C of a table-table chain, the outer axis otherwise
   for (std::size_t i = 0; i < n; ++i) {
-    const BranchSplit& sp = splits[i];
     Joints q = path.joints[i];
-    if (sp.count > 0 && !sp.singular && (i > 0 || have_previous) && unwound_within(kin, q, previous)) {
+    if ((status[i] & kStatusMask) == kRegular && (i > 0 || have_previous) && unwound_within(kin, q, previous)) {
       path.joints[i] = q;
       previous = q;
       have_previous = true;
@@ -341,6 +364,7 @@ JointPath inverse_path(const Kinematics& kin, std::span<const ClPose> poses, con
     }
     Choice c = choose(kin, i, s, previous, have_previous);
     for (auto& f : c.faults) path.violations.push_back(std::move(f));
+    const BranchSplit sp = kin.split(poses[i]);
     path.joints[i] = c.joints;
     previous = c.joints;
     have_previous = true;

@@ -29,12 +29,6 @@ double effective_radius(const TorusTool& tool, const Orientation& o) {
   return (tool.radius - tool.corner) * c * c / (s * (1 - sa * sa * s * s)) + tool.corner;
 }
 
-double flat_scallop(double r, double stepover) {
-  if (!std::isfinite(r)) return 0;
-  if (stepover >= 2 * r) return r;
-  return r - std::sqrt(r * r - stepover * stepover / 4);
-}
-
 double pass_time(const SurfacePass& pass, const TorusTool& tool, const std::vector<Orientation>& orientation, const machine::Kinematics& kin) {
   machine::ClProgram cl;
   cl.origin = "pass";
@@ -207,7 +201,7 @@ PassOrientation relax_orientation(const SurfacePass& pass, const TorusTool& tool
     out.poses.push_back(tool_pose(pass.points[i], tool, out.orientation[i]));
     const double r = effective_radius(tool, out.orientation[i]);
     out.effective_radius.push_back(r);
-    out.scallop.push_back(flat_scallop(r, settings.stepover));
+    out.scallop.push_back(flat_scallop(settings.stepover, r));
     const double kappa = pass.points[i].cross_curvature;
     out.gouge_margin.push_back(kappa > 0 ? 1 / kappa - r : std::numeric_limits<double>::infinity());
   }

@@ -17,6 +17,7 @@
 // the surface's concave curvature across the feed.
 #include "machine/feed_prediction.hpp"
 #include "machine/kinematics.hpp"
+#include "paths/tool.hpp"
 
 #include <Eigen/Core>
 
@@ -52,8 +53,7 @@ struct Orientation {
 machine::ClPose tool_pose(const PassPoint& p, const TorusTool& tool, const Orientation& o);
 // The effective radius across the feed (Herraz eq. 1.5, with the tilt as the slope s and the yaw as α).
 double effective_radius(const TorusTool& tool, const Orientation& o);
-// The scallop left between passes `stepover` apart by that radius on flat ground.
-double flat_scallop(double effective_radius, double stepover);
+// The scallop it leaves at a step-over on flat ground is paths/tool.hpp's flat_scallop(stepover, radius).
 
 struct RelaxationSettings {
   double tilt_min = 1 * 3.14159265358979323846 / 180, tilt_max = 5 * 3.14159265358979323846 / 180;  // rad

@@ -234,6 +234,32 @@ std::vector<std::string> TomlReader::strings(const std::string& key) {
   return values;
 }
 
+std::vector<std::vector<double>> TomlReader::real_rows(const std::string& key, std::size_t width, Range range) {
+  impl_->consumed.insert(key);
+  auto* node = impl_->find(key);
+  if (!node) fail(key, "missing; expected an array of [" + std::to_string(width) + " numbers] rows");
+  auto* array = node->as_array();
+  if (!array) fail(key, "expected an array of rows, got " + show(*node));
+  std::vector<std::vector<double>> rows;
+  for (std::size_t i = 0; i < array->size(); ++i) {
+    const std::string row_key = key + "." + std::to_string(i);
+    auto* row = array->get(i)->as_array();
+    if (!row || row->size() != width) fail(row_key, "row " + std::to_string(i + 1) + " must be an array of " + std::to_string(width) + " numbers, got " + show(*array->get(i)));
+    std::vector<double> values;
+    for (std::size_t j = 0; j < width; ++j) {
+      const auto& item = *row->get(j);
+      double v;
+      if (auto d = item.value_exact<double>()) v = *d;
+      else if (auto n = item.value_exact<int64_t>()) v = static_cast<double>(*n);
+      else fail(row_key, "row " + std::to_string(i + 1) + ", item " + std::to_string(j + 1) + " is not a number: " + show(item));
+      if (!range.contains(v)) fail(row_key, "row " + std::to_string(i + 1) + ", item " + std::to_string(j + 1) + " = " + show(item) + ": expected " + range.describe());
+      values.push_back(v);
+    }
+    rows.push_back(std::move(values));
+  }
+  return rows;
+}
+
 std::size_t TomlReader::table_count(const std::string& key) {
   impl_->consumed.insert(key);
   auto* node = impl_->find(key);

@@ -43,6 +43,9 @@ class TomlReader {
   std::string choice(const std::string& key, const std::vector<std::string>& allowed, std::optional<std::string> fallback = std::nullopt);
   std::vector<double> reals(const std::string& key, Range range, std::optional<std::vector<double>> fallback = std::nullopt);
   std::vector<std::string> strings(const std::string& key);
+  // An array of arrays of numbers, each of `width` numbers ([[x, y, z], ...]); a bad row's error names
+  // its own line.
+  std::vector<std::vector<double>> real_rows(const std::string& key, std::size_t width, Range range);
   // Number of tables in an array of tables ([[name]]); 0 when absent.
   std::size_t table_count(const std::string& key);
 

@@ -21,7 +21,10 @@
 
 namespace drom {
 
-void write_polylines_vtp(const std::filesystem::path& path, const Polylines& p) {
+namespace {
+
+// Polylines (or, with `as_vertices`, one vertex cell per point) and their fields, as a .vtp.
+void write_vtp(const std::filesystem::path& path, const Polylines& p, bool as_vertices) {
   const auto n = static_cast<vtkIdType>(p.points.cols());
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
@@ -37,7 +40,16 @@ void write_polylines_vtp(const std::filesystem::path& path, const Polylines& p) 
   }
   vtkNew<vtkPolyData> poly;
   poly->SetPoints(points);
-  poly->SetLines(lines);
+  if (as_vertices) {
+    vtkNew<vtkCellArray> vertices;
+    for (vtkIdType i = 0; i < n; ++i) {
+      vertices->InsertNextCell(1);
+      vertices->InsertCellPoint(i);
+    }
+    poly->SetVerts(vertices);
+  } else {
+    poly->SetLines(lines);
+  }
   for (const auto& [name, values] : p.fields.point_vectors) {
     vtkNew<vtkDoubleArray> a;
     a->SetName(name.c_str());
@@ -64,6 +76,18 @@ void write_polylines_vtp(const std::filesystem::path& path, const Polylines& p) 
   vtkNew<vtkXMLPolyDataWriter> writer;
   writer->SetInputData(poly);
   write_vtk_xml(*writer, path);
+}
+
+}  // namespace
+
+void write_polylines_vtp(const std::filesystem::path& path, const Polylines& polylines) { write_vtp(path, polylines, false); }
+
+void write_points_vtp(const std::filesystem::path& path, const Eigen::Matrix3Xd& points, const VtuFields& fields) {
+  Polylines p;
+  p.points = points;
+  p.fields = fields;
+  if (!p.fields.cell_scalars.empty()) throw std::invalid_argument("write_points_vtp: points carry point fields only");
+  write_vtp(path, p, true);
 }
 
 // The fields on a grid whose points are the mesh's nodes and whose cells are the `kept` elements.

@@ -37,6 +37,9 @@ struct Polylines {
 };
 void write_polylines_vtp(const std::filesystem::path& path, const Polylines& polylines);
 
+// Points alone (a point cloud: each point a vertex cell) with point fields, as a .vtp.
+void write_points_vtp(const std::filesystem::path& path, const Eigen::Matrix3Xd& points, const VtuFields& fields);
+
 // A .pvd collection: ParaView opens it as one time series.
 class PvdCollection {
  public:

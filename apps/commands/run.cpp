@@ -9,7 +9,7 @@ namespace drom::app {
 
 namespace {
 
-loop::RunOptions run_options(const CommandOptions& options) { return {options.out, options.quiet, options.threads}; }
+loop::RunOptions run_options(const CommandOptions& options) { return {options.out, options.quiet, options.threads, options.replan}; }
 
 }  // namespace
 
@@ -32,6 +32,11 @@ int run_command(const CommandOptions& options) {
   if (r.corrected.calibration.points > 0)
     std::printf("  %-52s %.2e mm (slope x offset %.2e mm, ratio %.2f)\n", "calibration error's bias on the measured floor, RMS", r.corrected.calibration.rms_bias,
                 r.corrected.calibration.rms_slope_times_offset, r.corrected.calibration.ratio);
+  if (r.summary.contains("replanned_finish")) {
+    const auto& q = r.summary["replanned_finish"];
+    std::printf("  %-52s %.4f mm (the nominal path: %.4f mm)\n", "re-planned finish, max distance to the truth", q["max_distance_to_truth_mm"].get<double>(),
+                q["nominal_max_distance_to_truth_mm"].get<double>());
+  }
   std::printf("  outputs in %s: passes.csv/.png, final_shape_error.png, final_shape.pvd, offsets.csv, corrected_program.nc, summary.json (%.0f s)\n",
               options.out.string().c_str(), r.summary["timing_s"]["total"].get<double>());
   return 0;

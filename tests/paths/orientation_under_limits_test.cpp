@@ -64,8 +64,8 @@ TEST(OrientationUnderLimits, EffectiveRadiusAndScallopMatchTheSeeds) {
   const TorusTool tool{5, 1.5};
   EXPECT_NEAR(effective_radius(tool, {1 * kDeg, 0}), 202.0, 0.05);
   EXPECT_NEAR(effective_radius(tool, {5 * kDeg, 0}), 41.7, 0.05);
-  EXPECT_NEAR(flat_scallop(effective_radius(tool, {1 * kDeg, 0}), 8), 0.040, 0.0005);
-  EXPECT_NEAR(flat_scallop(effective_radius(tool, {5 * kDeg, 0}), 8), 0.192, 0.0005);
+  EXPECT_NEAR(flat_scallop(8, effective_radius(tool, {1 * kDeg, 0})), 0.040, 0.0005);
+  EXPECT_NEAR(flat_scallop(8, effective_radius(tool, {5 * kDeg, 0})), 0.192, 0.0005);
   EXPECT_NEAR(effective_radius(tool, {5 * kDeg, std::numbers::pi / 2}), tool.corner, 1e-12);  // tilted across the feed: the corner
   EXPECT_NEAR(effective_radius({5, 5}, {20 * kDeg, 0.3}), 5, 1e-12);                          // a ball
 }

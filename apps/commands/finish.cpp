@@ -1,0 +1,16 @@
+// drom finish: finishing paths on a free-form surface that take the least time under a scallop bound
+// (paths/finish_run.hpp).
+#include "apps/commands.hpp"
+#include "paths/finish_run.hpp"
+#include "support/input_error.hpp"
+
+namespace drom::app {
+
+int finish_command(const CommandOptions& options) {
+  if (!options.case_path) throw InputError("drom finish needs a finishing case, e.g. drom finish cases/rubio.toml");
+  const paths::FinishCase c = paths::load_finish_case(*options.case_path, options.overrides);
+  paths::run_finish(c, {options.out, options.quiet, options.threads});
+  return 0;
+}
+
+}  // namespace drom::app

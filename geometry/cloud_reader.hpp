@@ -1,0 +1,33 @@
+#pragma once
+// Point clouds read from the files scanners and their software write: XYZ text (any of space, tab,
+// comma or semicolon between columns, so CSV too) and PLY (ascii, binary little- and big-endian).
+// Every entry point takes the bytes and the name of where they came from, so a fuzzer can call it
+// directly. Malformed input throws InputError naming the origin, the line (text) or the byte offset
+// (binary) and what was expected; it never crashes and never yields a silently wrong cloud: NaN or
+// infinite coordinates, missing x/y/z, truncated data and empty clouds are all errors.
+//
+// XYZ/CSV: one point per line, '#' or '//' comment lines and blank lines skipped. An optional first
+// line names the columns (x, y, z required; nx, ny, nz together or not at all; others ignored).
+// Without it, the first three columns are x, y, z; a line of exactly six columns carries the normal in
+// columns four to six (which must then be unit vectors; name the columns otherwise). Every line has
+// the same number of columns.
+// PLY: the "vertex" element's x, y, z (any numeric type) and nx, ny, nz when present; other elements
+// (faces, ...) and properties are skipped, list properties included.
+#include "geometry/point_cloud.hpp"
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace drom::geometry {
+
+PointCloud parse_xyz(std::string_view text, const std::string& origin);
+PointCloud parse_ply(std::string_view bytes, const std::string& origin);
+// PLY when the bytes start with "ply", XYZ text otherwise.
+PointCloud parse_cloud(std::string_view bytes, const std::string& origin);
+
+// A file by its content (see parse_cloud); every coordinate multiplied by `scale` (the seed scaled its
+// clouds by 7/20 and 1/3). Throws InputError when the file is missing or unreadable.
+PointCloud read_cloud(const std::filesystem::path& path, double scale = 1);
+
+}  // namespace drom::geometry

@@ -1,0 +1,92 @@
+#include "paths/exact_passes.hpp"
+
+#include "geometry/local_geometry.hpp"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+
+namespace drom::paths {
+
+namespace {
+
+struct Node {
+  double u, v;
+  Eigen::Vector3d point;
+};
+
+SurfaceContact contact(const geometry::NurbsSurface& s, double u, double v, const Eigen::Vector3d& reference) {
+  const auto g = geometry::local_geometry(s.derivatives(u, v));
+  const double sign = g.normal.dot(reference) < 0 ? -1.0 : 1.0;
+  return {g.point, sign * g.normal, sign * g.curvature};
+}
+
+// The point of the iso-curve through the crossing where m . S = level.
+Node on_iso_curve(const geometry::NurbsSurface& s, const Eigen::Vector3d& m, double level, const IsoCrossing& x) {
+  double u = x.u, v = x.v;
+  for (int it = 0; it < 12; ++it) {
+    const auto d = s.derivatives(u, v);
+    const double g = m.dot(d.point) - level, slope = m.dot(x.along_u ? d.du : d.dv);
+    if (std::abs(g) < 1e-12 || slope == 0) break;
+    double& t = x.along_u ? u : v;
+    t = std::clamp(t - g / slope, x.lo, x.hi);
+  }
+  return {u, v, s.point(u, v)};
+}
+
+// The point of the plane's intersection curve halfway (along the chord) between a and b.
+Node halfway(const geometry::NurbsSurface& s, const Eigen::Vector3d& m, double level, const Node& a, const Node& b) {
+  const Eigen::Vector3d chord_mid = 0.5 * (a.point + b.point), d = (b.point - a.point).normalized();
+  double u = 0.5 * (a.u + b.u), v = 0.5 * (a.v + b.v);
+  for (int it = 0; it < 12; ++it) {
+    const auto q = s.derivatives(u, v);
+    const Eigen::Vector2d f(m.dot(q.point) - level, d.dot(q.point - chord_mid));
+    if (f.norm() < 1e-12) break;
+    Eigen::Matrix2d j;
+    j << m.dot(q.du), m.dot(q.dv), d.dot(q.du), d.dot(q.dv);
+    const Eigen::Vector2d step = j.fullPivLu().solve(f);
+    if (!step.allFinite()) break;
+    u = std::clamp(u - step(0), s.u_min(), s.u_max());
+    v = std::clamp(v - step(1), s.v_min(), s.v_max());
+  }
+  return {u, v, s.point(u, v)};
+}
+
+void refine(const geometry::NurbsSurface& s, const Eigen::Vector3d& m, double level, const Node& a, const Node& b, double tolerance, int depth,
+            std::vector<Node>& out) {
+  if (depth > 0) {
+    const Node mid = halfway(s, m, level, a, b);
+    if ((mid.point - 0.5 * (a.point + b.point)).norm() > tolerance) {
+      refine(s, m, level, a, mid, tolerance, depth - 1, out);
+      refine(s, m, level, mid, b, tolerance, depth - 1, out);
+      return;
+    }
+  }
+  out.push_back(b);
+}
+
+}  // namespace
+
+std::vector<SurfaceContact> exact_chain(const geometry::NurbsSurface& surface, const Eigen::Vector3d& plane_normal, double level,
+                                        const std::vector<IsoCrossing>& chain, const std::vector<Eigen::Vector3d>& reference_normals, double tolerance) {
+  std::vector<Node> nodes;
+  std::vector<std::size_t> origin;  // which crossing each node is nearest to, for its reference normal
+  for (std::size_t k = 0; k < chain.size(); ++k) {
+    const Node n = on_iso_curve(surface, plane_normal, level, chain[k]);
+    if (nodes.empty()) {
+      nodes.push_back(n);
+      origin.push_back(k);
+      continue;
+    }
+    const std::size_t before = nodes.size();
+    refine(surface, plane_normal, level, nodes.back(), n, tolerance, 8, nodes);
+    for (std::size_t i = before; i < nodes.size(); ++i) origin.push_back(k);
+  }
+  std::vector<SurfaceContact> out;
+  out.reserve(nodes.size());
+  for (std::size_t i = 0; i < nodes.size(); ++i) out.push_back(contact(surface, nodes[i].u, nodes[i].v, reference_normals[origin[i]]));
+  return out;
+}
+
+}  // namespace drom::paths

@@ -1,0 +1,497 @@
+#include "paths/orient_run.hpp"
+
+#include "geometry/surface_input.hpp"
+#include "machine/cl_data.hpp"
+#include "machine/feed_prediction.hpp"
+#include "machine/post_processor.hpp"
+#include "support/atomic_file.hpp"
+#include "support/input_error.hpp"
+#include "support/png_plot.hpp"
+#include "support/summary.hpp"
+#include "support/toml_reader.hpp"
+#include "support/vtk_fields.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <numbers>
+#include <sstream>
+
+namespace drom::paths {
+
+namespace {
+constexpr double kDeg = 180 / std::numbers::pi;
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+}  // namespace
+
+OrientCase parse_orient_case(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides) {
+  TomlReader r(text, origin);
+  for (const auto& o : overrides) r.apply_override(o);
+  OrientCase c;
+  c.origin = origin;
+  const std::string kind = r.choice("scene.kind", {"bump", "corner", "impeller", "panel"});
+  if (kind == "bump") {
+    BumpOptions o;
+    o.lateral = r.real("scene.lateral", Range{}, o.lateral);
+    c.scene = bump_scene(o);
+  } else if (kind == "corner") {
+    CornerOptions o;
+    o.stick_out = r.real("scene.stick_out", Range::positive(), o.stick_out);
+    o.roll = r.real("scene.roll", Range::closed(-1.2, 1.2), o.roll);
+    c.scene = corner_scene(o);
+  } else if (kind == "impeller") {
+    ImpellerOptions o;
+    o.blades = static_cast<int>(r.integer("scene.blades", 2, 40, o.blades));
+    o.veins = static_cast<int>(r.integer("scene.veins", -1, 40, o.veins));
+    o.v_first = r.real("scene.v_first", Range::closed(0, 1), o.v_first);
+    o.v_last = r.real("scene.v_last", Range::closed(0, 1), o.v_last);
+    o.v_step = r.real("scene.v_step", Range::positive(), o.v_step);
+    o.lean = r.real("scene.lean", Range::closed(-0.8, 0.8), o.lean);
+    o.lead = r.real("scene.lead", Range::closed(-1, 1), o.lead);
+    o.point_spacing = r.real("scene.point_spacing", Range::positive(), o.point_spacing);
+    if (o.v_last < o.v_first) r.fail("scene.v_last", "must not be below scene.v_first");
+    c.scene = impeller_scene(o);
+  } else {
+    PanelOptions o;
+    o.stepover = r.real("scene.stepover", Range::positive(), o.stepover);
+    o.lead = r.real("scene.lead", Range::closed(-1, 1), o.lead);
+    o.clamp_height = r.real("scene.clamp_height", Range::positive(), o.clamp_height);
+    c.scene = panel_scene(o);
+  }
+  // Extra check surfaces: patches or STL triangles (fixtures, clamps, a machine part).
+  const std::filesystem::path base = std::filesystem::path(origin).parent_path();
+  for (std::size_t i = 0, n = r.table_count("check_surfaces"); i < n; ++i) {
+    const std::string k = "check_surfaces." + std::to_string(i);
+    if (r.has(k + ".stl")) {
+      std::filesystem::path stl = r.text(k + ".stl");
+      if (stl.is_relative()) stl = base / stl;
+      c.scene.check_mesh.append(read_stl_triangles(stl));
+    } else {
+      const bool flip = r.boolean(k + ".flip", false);
+      const geometry::SurfaceInput s = geometry::read_surface(r, k, base);
+      c.scene.check_patches.push_back({k, s.surface, flip});
+    }
+  }
+  ToolBody& t = c.scene.tool;
+  const std::string cutter = r.choice("tool.kind", {"ball", "torus"}, t.cutter.kind == ToolKind::ball ? "ball" : "torus");
+  t.cutter.radius = r.real("tool.radius", Range::positive(), t.cutter.radius);
+  t.cutter.kind = cutter == "ball" ? ToolKind::ball : ToolKind::torus;
+  t.cutter.corner_radius = cutter == "ball" ? t.cutter.radius : r.real("tool.corner_radius", Range::positive(), std::min(t.cutter.corner_radius, t.cutter.radius));
+  t.flute_length = r.real("tool.flute_length", Range::positive(), t.flute_length);
+  t.shank_radius = r.real("tool.shank_radius", Range::positive(), t.shank_radius);
+  t.stick_out = r.real("tool.stick_out", Range::positive(), t.stick_out);
+  if (r.has("tool.holder_z") || r.has("tool.holder_radius")) {
+    t.holder.z = r.reals("tool.holder_z", Range::non_negative());
+    t.holder.radius = r.reals("tool.holder_radius", Range::positive());
+  }
+  c.tool_nodes = static_cast<int>(r.integer("tool.nodes", 0, 1000000, c.tool_nodes));
+  c.skin_spacing = r.real("tool.skin_spacing", Range::positive(), c.skin_spacing);
+  try {
+    t.check();
+  } catch (const InputError& e) {
+    r.fail("tool", e.what());
+  }
+  // The model.
+  RecallParameters& rp = c.dynamics.recall;
+  rp.stiffness = r.real("model.k", Range::positive(), rp.stiffness);
+  rp.feed = r.real("model.feed", Range::positive(), rp.feed);
+  rp.spacing = r.real("model.d0", Range::positive(), rp.spacing);
+  c.obstacle_spacing = r.real("model.obstacle_spacing", Range::positive(), rp.spacing);
+  c.khatib.eta = r.real("model.eta", Range::positive(), c.khatib.eta);
+  c.khatib.influence_radius = r.real("model.r0", Range::positive(), c.khatib.influence_radius);
+  const std::string agg = r.choice("model.aggregation", {"F1", "F2", "F3"}, "F1");
+  c.aggregation = agg == "F1" ? Aggregation::F1 : agg == "F2" ? Aggregation::F2 : Aggregation::F3;
+  const std::string moment = r.choice("model.moment", {"G", "lever", "direction"}, "direction");
+  c.dynamics.moment = moment == "G" ? MomentModel::PointG : moment == "lever" ? MomentModel::Lever : MomentModel::Direction;
+  c.dynamics.lever_g = r.real("model.lever_g", Range::positive(), t.stick_out - t.pivot_height());
+  c.dynamics.jerk_lag = r.real("model.jerk_lag", Range::non_negative(), 0);
+  c.model_on = r.boolean("model.enabled", true);
+  // Integration.
+  c.dynamics.adaptive = r.choice("integration.method", {"arkode", "rk4"}, "arkode") == "arkode";
+  c.dynamics.rk4_step = r.real("integration.rk4_step", Range::positive(), c.dynamics.rk4_step);
+  c.dynamics.relative_tolerance = r.real("integration.rtol", Range::positive(), c.dynamics.relative_tolerance);
+  c.dynamics.absolute_tolerance = r.real("integration.atol", Range::positive(), c.dynamics.absolute_tolerance);
+  c.dynamics.output_step = r.real("integration.output_step", Range::positive(), c.dynamics.output_step);
+  c.dynamics.clearance_fraction = r.real("integration.clearance_fraction", Range::open_closed(0, 1), c.dynamics.clearance_fraction);
+  // The field.
+  c.voxel = r.choice("field.kind", {"direct", "voxel"}, "direct") == "voxel";
+  c.voxel_settings.voxel = r.real("field.voxel", Range::positive(), c.voxel_settings.voxel);
+  const std::string interp = r.choice("field.interpolation", {"trilinear", "triquadratic", "tricubic"}, "trilinear");
+  c.voxel_settings.interpolation = interp == "trilinear" ? VoxelInterpolation::trilinear
+                                   : interp == "triquadratic" ? VoxelInterpolation::triquadratic
+                                                              : VoxelInterpolation::tricubic;
+  if (c.voxel && c.aggregation != Aggregation::F1) r.fail("model.aggregation", "the voxel field stores F1 (the seed's eq. 4.2): use F1 or field.kind = \"direct\"");
+  // The check and the machine.
+  c.clearance.voxel = r.real("check.voxel", Range::positive(), c.clearance.voxel);
+  c.clearance.required = r.real("check.required", Range{}, c.clearance.required);
+  c.clearance.gouge_spacing = r.real("check.gouge_spacing", Range::positive(), c.clearance.gouge_spacing);
+  c.machine = r.text("machine.definition", c.machine);
+  r.finish();
+  c.resolved = r.resolved_text();
+  return c;
+}
+
+OrientCase load_orient_case(const std::filesystem::path& path, const std::vector<std::string>& overrides) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path.string() + ": cannot open the case file");
+  std::stringstream text;
+  text << in.rdbuf();
+  return parse_orient_case(text.str(), path.string(), overrides);
+}
+
+namespace {
+
+struct AxisKinematics {
+  std::vector<double> s;                       // mm
+  std::vector<machine::Joints> q, v, a, j;     // rotary joints and their time derivatives at the feed
+  double worst_ratio[3] = {0, 0, 0};           // max |q̇|/V, |q̈|/A, |q⃛|/J over the rotary axes
+  int worst_axis[3] = {-1, -1, -1};
+};
+
+// Rotary axes along a pass at the programmed feed: q(s) by inverse kinematics, time derivatives by
+// central differences (v0 d/ds), compared with the machine's limits.
+AxisKinematics rotary_kinematics(const machine::Kinematics& kin, const std::vector<machine::ClPose>& poses, const std::vector<double>& s, double feed) {
+  AxisKinematics k;
+  const machine::JointPath path = machine::inverse_path(kin, poses);
+  const std::size_t n = poses.size();
+  k.s = s;
+  k.q = path.joints;
+  const double v0 = feed / 60;
+  auto diff = [&](const std::vector<machine::Joints>& x) {
+    std::vector<machine::Joints> d(n, machine::Joints::Zero());
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t lo = i == 0 ? 0 : i - 1, hi = std::min(i + 1, n - 1);
+      if (hi > lo) d[i] = (x[hi] - x[lo]) / ((s[hi] - s[lo]) / v0);
+    }
+    return d;
+  };
+  k.v = diff(k.q);
+  k.a = diff(k.v);
+  k.j = diff(k.a);
+  const machine::Machine& m = kin.machine();
+  for (int axis = 3; axis < m.joint_count(); ++axis)
+    for (std::size_t i = 0; i < n; ++i) {
+      const double r[3] = {std::abs(k.v[i](axis)) / m.axes[axis].velocity, std::abs(k.a[i](axis)) / m.axes[axis].acceleration,
+                           std::abs(k.j[i](axis)) / m.axes[axis].jerk};
+      for (int d = 0; d < 3; ++d)
+        if (r[d] > k.worst_ratio[d]) {
+          k.worst_ratio[d] = r[d];
+          k.worst_axis[d] = axis;
+        }
+    }
+  return k;
+}
+
+machine::ClProgram cl_program(const std::vector<std::vector<machine::ClPose>>& passes, double feed) {
+  machine::ClProgram p;
+  p.origin = "drom orient";
+  for (const auto& pass : passes) {
+    if (pass.empty()) continue;
+    machine::ClPoint above;
+    above.pose = pass.front();
+    above.pose.tip += 20 * pass.front().axis;
+    above.rapid = true;
+    p.points.push_back(above);
+    for (const auto& pose : pass) p.points.push_back({pose, feed, false, 0});
+    machine::ClPoint retract;
+    retract.pose = pass.back();
+    retract.pose.tip += 20 * pass.back().axis;
+    retract.feed = feed;
+    p.points.push_back(retract);
+  }
+  return p;
+}
+
+}  // namespace
+
+OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
+  const OrientScene& scene = c.scene;
+  const ToolBody& tool = scene.tool;
+  auto say = [&](const std::string& line) {
+    if (!options.quiet) std::cout << line << std::endl;
+  };
+  // The machine first: a tool longer than the Z stroke cannot be mounted.
+  machine::Machine m = machine::load_machine(c.machine, {"setup.tool_length=" + std::to_string(tool.length())});
+  {
+    const int z = m.joint_of('Z');
+    if (z >= 0 && tool.length() >= m.axes[z].max - m.axes[z].min)
+      throw InputError(c.origin.string() + ": tool: " + std::to_string(tool.length()) + " mm from tip to holder top is longer than the Z stroke of " + m.name + " (" +
+                       std::to_string(m.axes[z].max - m.axes[z].min) + " mm)");
+  }
+  const machine::Kinematics kin(m);
+
+  // Precompute: obstacles, tool nodes, the distance field, the voxel field.
+  const auto t_pre = Clock::now();
+  const ObstacleCloud obstacles = scene_obstacles(scene, c.obstacle_spacing, c.khatib.influence_radius);
+  const std::vector<Eigen::Vector3d> nodes = tool_skin_nodes(tool, c.tool_nodes, c.skin_spacing);
+  const ClearanceChecker checker(scene, c.clearance);
+  // A check surface crossing the CL path: the cutter itself would cut it.
+  for (std::size_t p = 0; p < scene.passes.size(); ++p) {
+    const FramedPath& path = scene.passes[p];
+    for (std::size_t i = 0; i < path.cl.size(); ++i) {
+      const double d = checker.distance().distance(path.cl[i]);
+      if (d < tool.cutter.corner_radius - 1e-3)
+        throw InputError(c.origin.string() + ": a check surface crosses the CL path: pass " + std::to_string(p) + " (" + scene.pass_names[p] + ") at s = " +
+                         std::to_string(path.s[i]) + " mm is " + std::to_string(d) + " mm from it, inside the cutter (radius " + std::to_string(tool.cutter.corner_radius) + " mm)");
+    }
+  }
+  const double t_distance = seconds_since(t_pre);
+  const auto t_field = Clock::now();
+  std::unique_ptr<ForceField> field;
+  std::unique_ptr<VoxelField> voxels;
+  if (c.voxel) {
+    voxels = std::make_unique<VoxelField>(obstacles, c.khatib, c.voxel_settings);
+  } else {
+    field = std::make_unique<DirectField>(obstacles, c.khatib, c.aggregation);
+  }
+  const ForceField& force = c.voxel ? static_cast<const ForceField&>(*voxels) : *field;
+  const double t_voxel = seconds_since(t_field);
+  say("drom orient: " + scene.description + "; " + std::to_string(obstacles.size()) + " obstacle nodes, " + std::to_string(nodes.size()) + " tool nodes, " +
+      std::to_string(scene.passes.size()) + " passes");
+
+  // Poses: every pass integrated (the seed's model), or the programmed axis alone.
+  const auto t_poses = Clock::now();
+  OrientResult result;
+  result.passes.resize(scene.passes.size());
+  long evaluations = 0, steps = 0;
+  for (std::size_t p = 0; p < scene.passes.size(); ++p) {
+    if (c.model_on) {
+      result.passes[p] = integrate_axis(scene.passes[p], nodes, force, c.dynamics);
+    } else {
+      // The programmed axis sampled like the integrated one.
+      const FramedPath& path = scene.passes[p];
+      const int n = std::max(2, static_cast<int>(std::ceil(path.length() / c.dynamics.output_step)) + 1);
+      for (int i = 0; i < n; ++i) {
+        AxisSample a;
+        a.s = path.length() * i / (n - 1);
+        const FramedPath::Frame fr = path.at(a.s);
+        a.roll = fr.roll_prog;
+        a.pitch = fr.pitch_prog;
+        a.cl = fr.cl;
+        a.axis = a.programmed_axis = tool_rotation(fr, a.roll, a.pitch).col(2);
+        result.passes[p].samples.push_back(a);
+      }
+    }
+    evaluations += result.passes[p].rhs_evaluations;
+    steps += result.passes[p].steps;
+    if (!options.quiet && (p + 1) % std::max<std::size_t>(1, scene.passes.size() / 10) == 0)
+      say("  pass " + std::to_string(p + 1) + "/" + std::to_string(scene.passes.size()) + " (" + scene.pass_names[p] + ")");
+  }
+  const double t_pose = seconds_since(t_poses);
+
+  // The proof: clearance and gouging of the corrected and of the programmed axes.
+  const auto t_check = Clock::now();
+  std::vector<std::vector<Eigen::Vector3d>> cl(result.passes.size()), after(result.passes.size()), before(result.passes.size());
+  std::vector<std::vector<double>> s(result.passes.size());
+  for (std::size_t p = 0; p < result.passes.size(); ++p)
+    for (const auto& a : result.passes[p].samples) {
+      cl[p].push_back(a.cl);
+      after[p].push_back(a.axis);
+      before[p].push_back(a.programmed_axis);
+      s[p].push_back(a.s);
+    }
+  result.after = checker.check_all(cl, after, s);
+  const double t_clear = seconds_since(t_check);
+  result.before = checker.check_all(cl, before, s);
+
+  // The machine: axes along the result, before and after, and the cycle times.
+  std::vector<std::vector<machine::ClPose>> poses_after(cl.size()), poses_before(cl.size());
+  for (std::size_t p = 0; p < cl.size(); ++p)
+    for (std::size_t i = 0; i < cl[p].size(); ++i) {
+      poses_after[p].push_back({cl[p][i] - tool.pivot_height() * after[p][i], after[p][i]});
+      poses_before[p].push_back({cl[p][i] - tool.pivot_height() * before[p][i], before[p][i]});
+    }
+  const double feed = c.dynamics.recall.feed;
+  json machine_json;
+  std::vector<AxisKinematics> axes_after;
+  double ratio_after[3] = {0, 0, 0}, ratio_before[3] = {0, 0, 0};
+  for (std::size_t p = 0; p < cl.size(); ++p) {
+    axes_after.push_back(rotary_kinematics(kin, poses_after[p], s[p], feed));
+    const AxisKinematics b = rotary_kinematics(kin, poses_before[p], s[p], feed);
+    for (int d = 0; d < 3; ++d) {
+      ratio_after[d] = std::max(ratio_after[d], axes_after.back().worst_ratio[d]);
+      ratio_before[d] = std::max(ratio_before[d], b.worst_ratio[d]);
+    }
+  }
+  const machine::ClProgram program_after = cl_program(poses_after, feed), program_before = cl_program(poses_before, feed);
+  const machine::ClOnMachine on_after = machine::cl_to_machine_program(program_after, kin), on_before = machine::cl_to_machine_program(program_before, kin);
+  for (const auto* on : {&on_after, &on_before})
+    if (!on->joints.violations.empty()) {
+      const auto& v = on->joints.violations.front();
+      throw InputError(c.origin.string() + ": CL point " + std::to_string(v.pose) + " on " + m.name + ": " + v.what);
+    }
+  const double cycle_after = machine::predict_feed(on_after.program, kin).cycle_time;
+  const double cycle_before = machine::predict_feed(on_before.program, kin).cycle_time;
+
+  // Summary.
+  double max_dev = 0, max_rate = 0, max_acc = 0, max_jerk = 0, path_length = 0;
+  for (const auto& h : result.passes) {
+    if (!h.samples.empty()) path_length += h.samples.back().s;
+    for (const auto& a : h.samples) {
+      max_dev = std::max(max_dev, std::acos(std::clamp(a.axis.dot(a.programmed_axis), -1.0, 1.0)));
+      max_rate = std::max(max_rate, std::hypot(a.roll_rate, a.pitch_rate));
+      max_acc = std::max(max_acc, std::hypot(a.roll_acc, a.pitch_acc));
+      max_jerk = std::max(max_jerk, std::hypot(a.roll_jerk, a.pitch_jerk));
+    }
+  }
+  json j;
+  j["command"] = "orient";
+  j["case"] = c.origin.string();
+  j["scene"] = {{"name", scene.name}, {"description", scene.description}, {"passes", scene.passes.size()}, {"path_length_mm", path_length},
+                {"check_patches", scene.check_patches.size()}, {"check_triangles", scene.check_mesh.triangles.size()}};
+  j["model"] = {{"enabled", c.model_on}, {"k_N_mm_per_rad", c.dynamics.recall.stiffness}, {"omega0_rad_s", c.dynamics.recall.omega0()},
+                {"J_N_mm_s2", c.dynamics.recall.inertia()}, {"c_N_mm_s", c.dynamics.recall.damping()}, {"eta_N_mm3", c.khatib.eta},
+                {"r0_mm", c.khatib.influence_radius}, {"aggregation", aggregation_name(c.aggregation)}, {"moment", moment_model_name(c.dynamics.moment)},
+                {"jerk_lag_s", c.dynamics.jerk_lag}, {"obstacle_nodes", obstacles.size()}, {"tool_nodes", nodes.size()},
+                {"integrator", c.dynamics.adaptive ? "ARKODE Dormand-Prince 4(5)" : "RK4"}, {"rhs_evaluations", evaluations}, {"steps", steps}};
+  if (c.voxel)
+    j["field"] = {{"kind", "voxel"}, {"voxel_mm", c.voxel_settings.voxel}, {"interpolation", interpolation_name(c.voxel_settings.interpolation)},
+                  {"stored_corners", voxels->stored_corners()}, {"pruned_material_corners", voxels->pruned_material_corners()}, {"memory_bytes", voxels->memory_bytes()}};
+  else
+    j["field"] = {{"kind", "direct"}};
+  j["orientation"] = {{"max_deviation_deg", max_dev * kDeg}, {"max_rate_rad_s", max_rate}, {"max_acceleration_rad_s2", max_acc}, {"max_jerk_rad_s3", max_jerk}};
+  auto report_json = [](const ClearanceReport& r) {
+    json v = json::array();
+    for (std::size_t k = 0; k < std::min<std::size_t>(r.collisions.size(), 200); ++k)
+      v.push_back({{"pass", r.collisions[k].pass}, {"s_mm", r.collisions[k].s}, {"clearance_mm", r.collisions[k].value}});
+    json g = json::array();
+    for (std::size_t k = 0; k < std::min<std::size_t>(r.gouges.size(), 200); ++k)
+      g.push_back({{"pass", r.gouges[k].pass}, {"s_mm", r.gouges[k].s}, {"depth_mm", r.gouges[k].value}});
+    return json{{"poses", r.poses}, {"worst_clearance_mm", r.worst_clearance}, {"collisions", r.collisions.size()}, {"worst_gouge_mm", r.worst_gouge},
+                {"gouges", r.gouges.size()}, {"collision_list", v}, {"gouge_list", g}};
+  };
+  j["clearance"] = {{"required_mm", c.clearance.required}, {"distance_voxel_mm", c.clearance.voxel}, {"after", report_json(result.after)},
+                    {"programmed_axis", report_json(result.before)}};
+  const char* names[3] = {"velocity", "acceleration", "jerk"};
+  for (int d = 0; d < 3; ++d) {
+    machine_json["max_ratio_to_limit_after"][names[d]] = ratio_after[d];
+    machine_json["max_ratio_to_limit_programmed"][names[d]] = ratio_before[d];
+  }
+  machine_json["name"] = m.name;
+  machine_json["cycle_time_programmed_s"] = cycle_before;
+  machine_json["cycle_time_after_s"] = cycle_after;
+  j["machine"] = machine_json;
+  j["timing_s"] = {{"distance_field", t_distance}, {"voxel_field", t_voxel}, {"poses", t_pose}, {"clearance_check", t_clear}};
+  j["verdict"] = result.after.collisions.empty() ? "collision-free" : "COLLISIONS";
+  result.summary = j;
+  say("  max deviation " + std::to_string(max_dev * kDeg) + " deg; worst clearance " + std::to_string(result.after.worst_clearance) + " mm (" +
+      std::to_string(result.after.collisions.size()) + " violations; programmed axis: " + std::to_string(result.before.worst_clearance) + " mm, " +
+      std::to_string(result.before.collisions.size()) + " violations); cycle time " + std::to_string(cycle_before) + " -> " + std::to_string(cycle_after) + " s");
+  if (!options.write_files) return result;
+
+  // Files.
+  const std::filesystem::path& out = options.out;
+  std::filesystem::create_directories(out);
+  write_file_atomically(out / "cl.csv", machine::cl_csv(program_after));
+  write_file_atomically(out / "program.ngc", machine::post_process(program_after, kin, {"drom orient " + scene.name}));
+  std::ostringstream angles, axes;
+  angles << "pass,s_mm,theta_f_rad,theta_t_rad,dtheta_f_rad_s,dtheta_t_rad_s,ddtheta_f_rad_s2,ddtheta_t_rad_s2,dddtheta_f_rad_s3,dddtheta_t_rad_s3,deviation_deg,"
+            "active_nodes,clearance_mm,gouge_mm\n";
+  axes << "pass,s_mm";
+  for (int a = 3; a < m.joint_count(); ++a)
+    for (const char* q : {"", "_velocity", "_acceleration", "_jerk"}) axes << "," << m.axes[a].name << q;
+  axes << "\n";
+  Polylines lines;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> theta_f, theta_t, clearance, gouge, deviation;
+  Eigen::VectorXd axis_after, axis_before;
+  std::vector<Eigen::Vector3d> after_all, before_all;
+  Polylines poses;
+  std::vector<Eigen::Vector3d> pose_points;
+  std::vector<double> pose_clearance;
+  for (std::size_t p = 0; p < result.passes.size(); ++p) {
+    std::vector<long long> line;
+    double next_pose = 0;
+    for (std::size_t i = 0; i < result.passes[p].samples.size(); ++i) {
+      const AxisSample& a = result.passes[p].samples[i];
+      const PoseCheck& pc = result.after.passes[p][i];
+      const double dev = std::acos(std::clamp(a.axis.dot(a.programmed_axis), -1.0, 1.0)) * kDeg;
+      angles << p << ',' << a.s << ',' << a.roll << ',' << a.pitch << ',' << a.roll_rate << ',' << a.pitch_rate << ',' << a.roll_acc << ',' << a.pitch_acc << ','
+             << a.roll_jerk << ',' << a.pitch_jerk << ',' << dev << ',' << a.active_nodes << ',' << pc.clearance << ',' << pc.gouge_depth << '\n';
+      const AxisKinematics& k = axes_after[p];
+      axes << p << ',' << a.s;
+      for (int ax = 3; ax < m.joint_count(); ++ax) axes << ',' << k.q[i](ax) * kDeg << ',' << k.v[i](ax) * kDeg << ',' << k.a[i](ax) * kDeg << ',' << k.j[i](ax) * kDeg;
+      axes << '\n';
+      line.push_back(static_cast<long long>(points.size()));
+      points.push_back(a.cl);
+      theta_f.push_back(a.roll);
+      theta_t.push_back(a.pitch);
+      clearance.push_back(std::min(pc.clearance, 1e3));
+      gouge.push_back(pc.gouge_depth);
+      deviation.push_back(dev);
+      after_all.push_back(a.axis);
+      before_all.push_back(a.programmed_axis);
+      if (a.s >= next_pose) {
+        next_pose += 5;
+        const Eigen::Vector3d tip = a.cl - tool.pivot_height() * a.axis;
+        poses.lines.push_back({static_cast<long long>(pose_points.size()), static_cast<long long>(pose_points.size() + 1)});
+        pose_points.push_back(tip);
+        pose_points.push_back(tip + tool.length() * a.axis);
+        pose_clearance.push_back(std::min(pc.clearance, 1e3));
+        pose_clearance.push_back(std::min(pc.clearance, 1e3));
+      }
+    }
+    lines.lines.push_back(line);
+  }
+  auto matrix = [](const std::vector<Eigen::Vector3d>& v) {
+    Eigen::Matrix3Xd m3(3, static_cast<Eigen::Index>(v.size()));
+    for (std::size_t i = 0; i < v.size(); ++i) m3.col(static_cast<Eigen::Index>(i)) = v[i];
+    return m3;
+  };
+  auto flat = [](const std::vector<Eigen::Vector3d>& v) {
+    Eigen::VectorXd x(static_cast<Eigen::Index>(3 * v.size()));
+    for (std::size_t i = 0; i < v.size(); ++i) x.segment<3>(static_cast<Eigen::Index>(3 * i)) = v[i];
+    return x;
+  };
+  lines.points = matrix(points);
+  lines.fields.point_scalars = {{"theta_f_rad", theta_f}, {"theta_t_rad", theta_t}, {"clearance_mm", clearance}, {"gouge_mm", gouge}, {"deviation_deg", deviation}};
+  lines.fields.point_vectors = {{"tool_axis", flat(after_all)}, {"programmed_axis", flat(before_all)}};
+  write_polylines_vtp(out / "path.vtp", lines);
+  poses.points = matrix(pose_points);
+  poses.fields.point_scalars = {{"clearance_mm", pose_clearance}};
+  write_polylines_vtp(out / "poses.vtp", poses);
+  write_file_atomically(out / "angles.csv", angles.str());
+  write_file_atomically(out / "axes.csv", axes.str());
+  std::vector<std::string> files{"cl.csv", "program.ngc", "path.vtp", "poses.vtp", "angles.csv", "axes.csv"};
+  // θ and its derivatives along s for the pass that deviates most.
+  std::size_t worst = 0;
+  double worst_dev = -1;
+  for (std::size_t p = 0; p < result.passes.size(); ++p)
+    for (const auto& a : result.passes[p].samples) {
+      const double d = std::acos(std::clamp(a.axis.dot(a.programmed_axis), -1.0, 1.0));
+      if (d > worst_dev) {
+        worst_dev = d;
+        worst = p;
+      }
+    }
+  const auto& h = result.passes[worst].samples;
+  const char* titles[4] = {"theta (rad)", "theta rate (rad/s)", "theta acceleration (rad/s^2)", "theta jerk (rad/s^3)"};
+  const char* stems[4] = {"angles.png", "angle_rates.png", "angle_accelerations.png", "angle_jerks.png"};
+  for (int d = 0; d < 4; ++d) {
+    PlotSpec plot;
+    plot.title = scene.name + ", pass " + scene.pass_names[worst] + ": " + titles[d];
+    plot.x_label = "s (mm)";
+    plot.y_label = titles[d];
+    PlotSeries f{"roll theta_f", {}, {}, "-"}, t{"pitch theta_t", {}, {}, "-"};
+    for (const auto& a : h) {
+      f.x.push_back(a.s);
+      t.x.push_back(a.s);
+      const double vf[4] = {a.roll, a.roll_rate, a.roll_acc, a.roll_jerk}, vt[4] = {a.pitch, a.pitch_rate, a.pitch_acc, a.pitch_jerk};
+      f.y.push_back(vf[d]);
+      t.y.push_back(vt[d]);
+    }
+    plot.series = {f, t};
+    if (write_png_plot(out / stems[d], plot)) files.push_back(stems[d]);
+  }
+  j["files"] = files;
+  j["resolved_case"] = c.resolved;
+  result.summary = j;
+  write_summary(out, j);
+  return result;
+}
+
+}  // namespace drom::paths

@@ -1,0 +1,63 @@
+#pragma once
+// `drom orient CASE`: the collision-free tool-axis orientation of seed 000 on a case, proved and put on
+// a machine. Reads the case ([scene], [tool], [model], [integration], [field], [check], [machine],
+// [[check_surfaces]]; docs/case-files.md), meshes the obstacles and the tool, integrates every pass,
+// checks clearance and gouging of the result (and of the programmed axis, to show what the model
+// avoids), maps both onto the machine (axis velocity, acceleration and jerk against the limits, the
+// predicted cycle time) and writes, in `out`:
+//   cl.csv, program.ngc     the corrected CL data and its 5-axis G-code (machine/'s post-processor)
+//   path.vtp                the CL path with θ, clearance, gouge and the axes (programmed and corrected)
+//   poses.vtp               the tool's axis as a segment tip → holder top every few mm
+//   angles.csv, angles.png  θ, θ̇, θ̈, θ⃛ along s (per pass)
+//   axes.csv                the rotary axes along s at the feed: position, velocity, acceleration, jerk
+//   summary.json            the figures, the timing split (precompute, poses, clearance check)
+#include "paths/axis_dynamics.hpp"
+#include "paths/clearance_check.hpp"
+#include "paths/force_voxel_field.hpp"
+#include "paths/orient_scene.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace drom::paths {
+
+struct OrientCase {
+  std::filesystem::path origin;
+  OrientScene scene;
+  KhatibParameters khatib;
+  Aggregation aggregation = Aggregation::F1;
+  DynamicsSettings dynamics;
+  double obstacle_spacing = 2;     // mm (d0 by default)
+  int tool_nodes = 500;            // random nodes; 0: a skin at `skin_spacing`
+  double skin_spacing = 1;
+  bool voxel = false;
+  VoxelFieldSettings voxel_settings;
+  ClearanceSettings clearance;
+  std::string machine = "ucp710_like";
+  bool model_on = true;            // false: the programmed axis only (what the clearance check flags)
+  std::string resolved;            // the case after overrides
+};
+
+OrientCase load_orient_case(const std::filesystem::path& path, const std::vector<std::string>& overrides = {});
+OrientCase parse_orient_case(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides = {});
+
+struct OrientOptions {
+  std::filesystem::path out = "out/orient";
+  bool quiet = false;
+  bool write_files = true;  // false: compute and return the summary only (tests, benchmark)
+};
+
+struct OrientResult {
+  nlohmann::json summary;
+  std::vector<AxisHistory> passes;
+  ClearanceReport after, before;  // the corrected and the programmed axes
+};
+
+// Throws InputError for bad input: a check surface crossing the CL path, a tool longer than the
+// machine's Z stroke, a pose out of the machine's reach.
+OrientResult run_orient(const OrientCase& c, const OrientOptions& options);
+
+}  // namespace drom::paths

@@ -1,0 +1,329 @@
+#include "paths/parallel_planes.hpp"
+
+#include "paths/exact_passes.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+namespace drom::paths {
+
+ContactStep contact_step(const Eigen::Vector3d& n, const Eigen::Matrix3d& curvature, const PassSettings& s) {
+  ContactStep c;
+  const Eigen::Vector3d& a = s.axis;
+  const Eigen::Vector3d m = a.cross(s.feed).normalized();
+  c.slope = std::acos(std::clamp(n.dot(a), -1.0, 1.0));
+  Eigen::Vector3d along = m.cross(n);  // the pass's tangent: in the plane and in the tangent plane
+  if (along.norm() < 1e-12) along = s.feed;  // the tangent plane contains the plane's normal: a wall along the pass
+  along.normalize();
+  const Eigen::Vector3d uphill = a - a.dot(n) * n;
+  c.alpha = uphill.norm() > 1e-12 ? std::acos(std::min(1.0, std::abs(along.dot(uphill.normalized())))) : 0.0;
+  c.effective_radius = effective_radius(s.tool, c.slope, c.alpha);
+  Eigen::Vector3d across = n.cross(along);
+  if (m.dot(across) < 0) across = -across;  // towards the next plane
+  c.curvature = across.dot(curvature * across);
+  const double scallop = s.exact && s.stepover == StepoverModel::curved ? s.scallop - s.chord_tolerance : s.scallop;
+  const double step = s.stepover == StepoverModel::curved ? curved_stepover(scallop, c.effective_radius, c.curvature)
+                                                          : flat_stepover(s.scallop, c.effective_radius);
+  c.stepover = std::min(step, level_ground_stepover(s.tool, s.scallop));
+  // The plane step that moves the contact `stepover` along the surface: an arc w from p ends at
+  // p + w t + (w^2 / 2) kappa n, so the step is w (m . t) + (w^2 / 2) kappa (m . n). The seed keeps
+  // the first term only.
+  const double w = c.stepover;
+  c.spacing = w * m.dot(across);
+  if (s.stepover != StepoverModel::seed) c.spacing = std::max(1e-3 * c.spacing, c.spacing + 0.5 * w * w * c.curvature * m.dot(n));
+  return c;
+}
+
+Eigen::Vector3d cutter_location(const Eigen::Vector3d& cc, const Eigen::Vector3d& n, const Tool& tool, const Eigen::Vector3d& axis) {
+  if (tool.kind == ToolKind::ball) return cc + tool.radius * (n - axis);
+  const double r = tool.corner_radius;
+  Eigen::Vector3d tip = cc + r * (n - axis);
+  const Eigen::Vector3d radial = n - n.dot(axis) * axis;
+  if (radial.norm() > 1e-12) tip += (tool.radius - r) * radial.normalized();
+  return tip;
+}
+
+namespace {
+
+struct Crossing {
+  int a, b;  // mesh nodes
+  double t;  // point = a + t (b - a)
+};
+
+// Slices of one zone by planes of increasing level: marching squares over the zone's mesh cells,
+// crossings chained through the mesh edges they share.
+class ZoneSlicer {
+ public:
+  ZoneSlicer(const MachiningMesh& mesh, const std::vector<int>& cells, const Eigen::Vector3d& normal) : mesh_(mesh), cells_(cells) {
+    phi_.resize(static_cast<std::size_t>(mesh.node_count()));
+    for (int k = 0; k < mesh.node_count(); ++k) phi_[static_cast<std::size_t>(k)] = normal.dot(mesh.points[static_cast<std::size_t>(k)]);
+    lo_.resize(cells.size());
+    hi_.resize(cells.size());
+    for (std::size_t k = 0; k < cells.size(); ++k) {
+      const auto c = corners(cells[k]);
+      lo_[k] = hi_[k] = phi(c[0]);
+      for (int q = 1; q < 4; ++q) {
+        lo_[k] = std::min(lo_[k], phi(c[static_cast<std::size_t>(q)]));
+        hi_[k] = std::max(hi_[k], phi(c[static_cast<std::size_t>(q)]));
+      }
+    }
+    order_.resize(cells.size());
+    std::iota(order_.begin(), order_.end(), 0);
+    std::sort(order_.begin(), order_.end(), [&](int x, int y) { return lo_[static_cast<std::size_t>(x)] < lo_[static_cast<std::size_t>(y)]; });
+    const int edges = mesh.cells_u * (mesh.cells_v + 1) + (mesh.cells_u + 1) * mesh.cells_v;
+    edge_stamp_.assign(static_cast<std::size_t>(edges), -1);
+    edge_segments_.resize(static_cast<std::size_t>(edges));
+    edge_crossing_.resize(static_cast<std::size_t>(edges));
+  }
+
+  double min_level() const { return lo_.empty() ? 0 : *std::min_element(lo_.begin(), lo_.end()); }
+  double max_level() const { return hi_.empty() ? 0 : *std::max_element(hi_.begin(), hi_.end()); }
+
+  // Cells entirely below `level` are never needed again.
+  void accept(double level) {
+    std::erase_if(active_, [&](int k) { return hi_[static_cast<std::size_t>(k)] < level; });
+  }
+
+  // The connected crossings at `level` (>= every accepted level), each chain in mesh order.
+  std::vector<std::vector<Crossing>> slice(double level) {
+    while (next_ < order_.size() && lo_[static_cast<std::size_t>(order_[next_])] <= level) active_.push_back(order_[next_++]);
+    ++stamp_;
+    segments_.clear();
+    for (const int k : active_) {
+      if (!(lo_[static_cast<std::size_t>(k)] < level && level <= hi_[static_cast<std::size_t>(k)])) continue;
+      cell_segments(cells_[static_cast<std::size_t>(k)], level);
+    }
+    return chains();
+  }
+
+ private:
+  std::array<int, 4> corners(int cell) const {
+    const int i = cell / mesh_.cells_v, j = cell % mesh_.cells_v;
+    return {mesh_.node(i, j), mesh_.node(i + 1, j), mesh_.node(i + 1, j + 1), mesh_.node(i, j + 1)};
+  }
+  double phi(int node) const { return phi_[static_cast<std::size_t>(node)]; }
+
+  // Edges of cell (i, j): 0 (n0 n1), 1 (n1 n2), 2 (n3 n2), 3 (n0 n3).
+  std::array<int, 4> edge_ids(int cell) const {
+    const int i = cell / mesh_.cells_v, j = cell % mesh_.cells_v, along_u = mesh_.cells_u * (mesh_.cells_v + 1);
+    return {i * (mesh_.cells_v + 1) + j, along_u + (i + 1) * mesh_.cells_v + j, i * (mesh_.cells_v + 1) + j + 1, along_u + i * mesh_.cells_v + j};
+  }
+
+  void cell_segments(int cell, double level) {
+    const auto n = corners(cell);
+    const auto e = edge_ids(cell);
+    static constexpr int ends[4][2] = {{0, 1}, {1, 2}, {3, 2}, {0, 3}};
+    std::array<bool, 4> above;
+    for (int q = 0; q < 4; ++q) above[static_cast<std::size_t>(q)] = phi(n[static_cast<std::size_t>(q)]) >= level;
+    std::array<int, 4> crossed{};
+    int count = 0;
+    for (int q = 0; q < 4; ++q) {
+      const int a = n[static_cast<std::size_t>(ends[q][0])], b = n[static_cast<std::size_t>(ends[q][1])];
+      if ((phi(a) >= level) == (phi(b) >= level)) continue;
+      const int id = e[static_cast<std::size_t>(q)];
+      if (edge_stamp_[static_cast<std::size_t>(id)] != stamp_) {
+        edge_stamp_[static_cast<std::size_t>(id)] = stamp_;
+        edge_segments_[static_cast<std::size_t>(id)] = {-1, -1};
+        edge_crossing_[static_cast<std::size_t>(id)] = {a, b, (level - phi(a)) / (phi(b) - phi(a))};
+      }
+      crossed[static_cast<std::size_t>(count++)] = q;
+    }
+    if (count == 2) {
+      add_segment(e[static_cast<std::size_t>(crossed[0])], e[static_cast<std::size_t>(crossed[1])]);
+    } else if (count == 4) {
+      // A saddle: the centre's side decides which corners the level cuts off.
+      const double centre = 0.25 * (phi(n[0]) + phi(n[1]) + phi(n[2]) + phi(n[3]));
+      if ((centre >= level) == above[0]) {
+        add_segment(e[0], e[1]);
+        add_segment(e[2], e[3]);
+      } else {
+        add_segment(e[3], e[0]);
+        add_segment(e[1], e[2]);
+      }
+    }
+  }
+
+  void add_segment(int e0, int e1) {
+    const int s = static_cast<int>(segments_.size());
+    segments_.push_back({e0, e1});
+    for (const int e : {e0, e1}) {
+      auto& slots = edge_segments_[static_cast<std::size_t>(e)];
+      (slots[0] < 0 ? slots[0] : slots[1]) = s;
+    }
+  }
+
+  int other_segment(int edge, int segment) const {
+    const auto& slots = edge_segments_[static_cast<std::size_t>(edge)];
+    return slots[0] == segment ? slots[1] : slots[0];
+  }
+
+  std::vector<std::vector<Crossing>> chains() {
+    std::vector<std::vector<Crossing>> result;
+    visited_.assign(segments_.size(), false);
+    for (std::size_t s0 = 0; s0 < segments_.size(); ++s0) {
+      if (visited_[s0]) continue;
+      // Walk back to an open end (or around a closed loop), then forward collecting edges.
+      int seg = static_cast<int>(s0), entry = segments_[s0][1];
+      for (std::size_t guard = 0; guard <= segments_.size(); ++guard) {
+        const int exit = segments_[static_cast<std::size_t>(seg)][0] == entry ? segments_[static_cast<std::size_t>(seg)][1] : segments_[static_cast<std::size_t>(seg)][0];
+        const int prev = other_segment(exit, seg);
+        if (prev < 0 || prev == static_cast<int>(s0)) {
+          entry = exit;
+          break;
+        }
+        entry = exit;
+        seg = prev;
+      }
+      // `entry` is the open end of `seg` (or where a loop closes).
+      std::vector<Crossing> chain;
+      chain.push_back(edge_crossing_[static_cast<std::size_t>(entry)]);
+      int edge = entry;
+      while (seg >= 0 && !visited_[static_cast<std::size_t>(seg)]) {
+        visited_[static_cast<std::size_t>(seg)] = true;
+        const auto& sg = segments_[static_cast<std::size_t>(seg)];
+        edge = sg[0] == edge ? sg[1] : sg[0];
+        chain.push_back(edge_crossing_[static_cast<std::size_t>(edge)]);
+        seg = other_segment(edge, seg);
+      }
+      result.push_back(std::move(chain));
+    }
+    return result;
+  }
+
+  const MachiningMesh& mesh_;
+  const std::vector<int>& cells_;
+  std::vector<double> phi_, lo_, hi_;
+  std::vector<int> order_, active_;
+  std::size_t next_ = 0;
+  int stamp_ = 0;
+  std::vector<int> edge_stamp_;
+  std::vector<std::array<int, 2>> edge_segments_;
+  std::vector<Crossing> edge_crossing_;
+  std::vector<std::array<int, 2>> segments_;
+  std::vector<bool> visited_;
+};
+
+// One plane's passes, with the step each contact point allows.
+std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, double level, const PassSettings& s) {
+  std::vector<Pass> passes;
+  for (const auto& chain : slicer.slice(level)) {
+    Pass p;
+    p.level = level;
+    std::vector<Eigen::Matrix3d> curvatures;
+    for (const auto& x : chain) {
+      const auto A = static_cast<std::size_t>(x.a), B = static_cast<std::size_t>(x.b);
+      p.cc.push_back(mesh.points[A] + x.t * (mesh.points[B] - mesh.points[A]));
+      p.normals.push_back((mesh.normals[A] + x.t * (mesh.normals[B] - mesh.normals[A])).normalized());
+      curvatures.push_back(mesh.curvature[A] + x.t * (mesh.curvature[B] - mesh.curvature[A]));
+    }
+    if (s.exact) {
+      // The same crossings solved on the true iso-curves, then refined along the true intersection.
+      std::vector<IsoCrossing> iso;
+      const int row = mesh.cells_v + 1;
+      for (const auto& x : chain) {
+        const int ia = x.a / row, ja = x.a % row, ib = x.b / row, jb = x.b % row;
+        IsoCrossing c;
+        c.along_u = ja == jb;
+        const double ua = mesh.node_u(ia), ub = mesh.node_u(ib), va = mesh.node_v(ja), vb = mesh.node_v(jb);
+        c.u = ua + x.t * (ub - ua);
+        c.v = va + x.t * (vb - va);
+        c.lo = c.along_u ? std::min(ua, ub) : std::min(va, vb);
+        c.hi = c.along_u ? std::max(ua, ub) : std::max(va, vb);
+        iso.push_back(c);
+      }
+      // Half the tolerance on the contact curve: the tool-tip curve, offset from it, bends up to a
+      // few times more sharply where the ground is concave.
+      const auto contacts = exact_chain(*mesh.surface, s.axis.cross(s.feed).normalized(), level, iso, p.normals, 0.5 * s.chord_tolerance);
+      p.cc.clear();
+      p.normals.clear();
+      curvatures.clear();
+      for (const auto& c : contacts) {
+        p.cc.push_back(c.point);
+        p.normals.push_back(c.normal);
+        curvatures.push_back(c.curvature);
+      }
+    }
+    if ((p.cc.back() - p.cc.front()).dot(s.feed) < 0) {
+      std::reverse(p.cc.begin(), p.cc.end());
+      std::reverse(p.normals.begin(), p.normals.end());
+      std::reverse(curvatures.begin(), curvatures.end());
+    }
+    p.worst_stepover = p.spacing = p.worst_effective_radius = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < p.cc.size(); ++i) {
+      const ContactStep step = contact_step(p.normals[i], curvatures[i], s);
+      p.worst_stepover = std::min(p.worst_stepover, step.stepover);
+      if (s.stepover != StepoverModel::seed) p.spacing = std::min(p.spacing, step.spacing);
+      else if (step.effective_radius < p.worst_effective_radius * (1 - 1e-12)) p.spacing = step.spacing;  // ties: the first along the feed
+      p.worst_effective_radius = std::min(p.worst_effective_radius, step.effective_radius);
+    }
+    passes.push_back(std::move(p));
+  }
+  std::sort(passes.begin(), passes.end(), [&](const Pass& x, const Pass& y) { return x.cc.front().dot(s.feed) < y.cc.front().dot(s.feed); });
+  return passes;
+}
+
+double plane_spacing(const std::vector<Pass>& plane) {
+  double spacing = std::numeric_limits<double>::infinity();
+  for (const auto& p : plane) spacing = std::min(spacing, p.spacing);
+  return spacing;
+}
+
+}  // namespace
+
+std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>& cells, const PassSettings& s) {
+  std::vector<Pass> result;
+  if (cells.empty()) return result;
+  const Eigen::Vector3d normal = s.axis.cross(s.feed).normalized();
+  ZoneSlicer slicer(mesh, cells, normal);
+  const double lo = slicer.min_level(), hi = slicer.max_level(), extent = hi - lo;
+  // A floor on the plane step, so a point where no step keeps the bound (the tool gouges) cannot stall the planner.
+  const double min_spacing = 1e-3 * flat_stepover(s.scallop, s.tool.corner_radius);
+  const auto spacing_of = [&](const std::vector<Pass>& plane) { return std::max(min_spacing, plane_spacing(plane)); };
+  // The first plane half a step inside the zone, the step measured just inside its edge.
+  std::vector<Pass> probe = passes_at(slicer, mesh, lo + std::min(1e-3, 0.5 * extent), s);
+  double level = probe.empty() ? lo + 0.5 * extent : std::min(lo + 0.5 * spacing_of(probe), lo + 0.5 * extent);
+  std::vector<Pass> plane = passes_at(slicer, mesh, level, s);
+  int index = 0;
+  while (true) {
+    slicer.accept(level);
+    double spacing = spacing_of(plane);
+    for (auto& p : plane) {
+      p.plane = index;
+      const bool backwards = s.zigzag && index % 2 == 1;
+      if (backwards) {
+        std::reverse(p.cc.begin(), p.cc.end());
+        std::reverse(p.normals.begin(), p.normals.end());
+      }
+    }
+    if (s.zigzag && index % 2 == 1) std::reverse(plane.begin(), plane.end());
+    for (auto& p : plane) result.push_back(std::move(p));
+    ++index;
+    double next = level + spacing;
+    if (s.stepover == StepoverModel::seed) {
+      if (next >= hi) break;
+      plane = passes_at(slicer, mesh, next, s);
+    } else {
+      if (level + 0.5 * spacing >= hi) break;
+      next = std::min(next, hi - 0.5 * spacing);
+      plane = passes_at(slicer, mesh, next, s);
+      // The scallop between two passes depends on both: where the next pass allows a smaller step,
+      // its plane moves back (twice at most; the step barely changes over a fraction of a step).
+      for (int retry = 0; retry < 2 && !plane.empty(); ++retry) {
+        const double allowed = spacing_of(plane);
+        if (next - level <= allowed * (1 + 1e-9)) break;
+        next = level + allowed;
+        plane = passes_at(slicer, mesh, next, s);
+      }
+    }
+    level = next;
+    if (plane.empty()) break;
+  }
+  return result;
+}
+
+}  // namespace drom::paths

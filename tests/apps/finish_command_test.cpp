@@ -1,0 +1,70 @@
+// drom finish end to end: the shipped inclined plane finished, its outputs written and consistent
+// (breakdown sums, the spot check within sh, machine/'s cycle time near the search's); an optimised
+// run resumes from its finished K; bad input exits with code 2 naming the file, line and key.
+#include "drom_process.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path root() {
+  const fs::path r = fs::temp_directory_path() / ("drom_finish_command_" + std::to_string(::getpid()));
+  fs::create_directories(r);
+  return r;
+}
+
+const std::string kCases = std::string(DROM_SOURCE_DIR) + "/cases/";
+
+}  // namespace
+
+TEST(FinishCommand, InclinedPlaneWritesItsOutputs) {
+  const fs::path out = root() / "plane";
+  const DromResult r = run_drom("finish " + kCases + "inclined_plane.toml --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"zones.vtu", "paths.vtp", "cl.csv", "breakdown.csv", "program.ngc", "summary.json"}) EXPECT_TRUE(fs::exists(out / f)) << f;
+  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  // The seed's verdict on its plane (s = 60 deg > s_c = 33.9 deg): the ball along the principal direction.
+  EXPECT_EQ(s["verdict"]["tool"], "ball along the principal direction");
+  EXPECT_NEAR(s["verdict"]["critical_slope_deg"].get<double>(), 33.86, 0.01);
+  const auto& t = s["time_s"];
+  EXPECT_NEAR(t["total"].get<double>(), t["passes"].get<double>() + t["links"].get<double>() + t["retracts"].get<double>() + t["between_zones"].get<double>(), 1e-9);
+  // The seed's Table 2.1 (36.8 s, 2459 mm) in the seed's accounting; here tool tips, so a little more.
+  EXPECT_NEAR(t["total"].get<double>(), 37.8, 1.0);
+  EXPECT_LE(s["scallop_check"]["max_height_mm"].get<double>(), 0.01);
+  EXPECT_GT(s["scallop_check"]["max_height_mm"].get<double>(), 0.007);
+  EXPECT_LT(s["scallop_check"]["max_gouge_mm"].get<double>(), 2e-4);
+  // machine/'s feed predictor on the posted program agrees with the search's double S within 10 %.
+  EXPECT_NEAR(s["predicted_cycle_time_s"].get<double>(), t["total"].get<double>(), 0.1 * t["total"].get<double>());
+}
+
+TEST(FinishCommand, OptimisedRunResumesFromItsFinishedK) {
+  const fs::path out = root() / "plane_optimised";
+  const std::string args = "finish " + kCases + "inclined_plane.toml --set zoning.optimize=true --set 'zoning.clusters=[2]' --set zoning.budget=20 --threads 1 --out " +
+                           out.string();
+  const DromResult first = run_drom(args);
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_TRUE(fs::exists(out / "optimization" / "K2.json"));
+  EXPECT_TRUE(fs::exists(out / "history.csv"));
+  const DromResult second = run_drom(args);
+  ASSERT_EQ(second.exit_code, 0) << second.output;
+  EXPECT_NE(second.output.find("(kept from an earlier run)"), std::string::npos) << second.output;
+  const auto a = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(a["optimization"].size(), 1u);
+}
+
+TEST(FinishCommand, BadInputExitsWithCode2) {
+  const DromResult undercut = run_drom("finish " + kCases + "rubio.toml --set finish.setup=3+2 --set 'finish.orientation=[90.0, 0.0]' --out " +
+                                       (root() / "undercut").string());
+  EXPECT_EQ(undercut.exit_code, 2) << undercut.output;
+  EXPECT_NE(undercut.output.find("finish.orientation"), std::string::npos) << undercut.output;
+  EXPECT_NE(undercut.output.find("undercuts the surface"), std::string::npos) << undercut.output;
+  const DromResult scallop = run_drom("finish " + kCases + "choi.toml --set finish.scallop=-1 --out " + (root() / "scallop").string());
+  EXPECT_EQ(scallop.exit_code, 2) << scallop.output;
+  EXPECT_NE(scallop.output.find("finish.scallop"), std::string::npos) << scallop.output;
+}

@@ -1,0 +1,269 @@
+// Point clouds: the XYZ/CSV and PLY readers (round trips, every format, and malformed input refused
+// with the file, the line or byte and what was expected), the drop frame, and the spatial indexes
+// against brute force.
+#include "geometry/cloud_bins.hpp"
+#include "geometry/cloud_kdtree.hpp"
+#include "geometry/cloud_reader.hpp"
+#include "geometry/cloud_voxel_map.hpp"
+#include "geometry/cloud_writer.hpp"
+#include "geometry/point_cloud.hpp"
+#include "support/input_error.hpp"
+
+#include <Eigen/LU>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <string>
+
+namespace {
+
+using namespace drom::geometry;
+
+PointCloud random_cloud(int n, unsigned seed, bool normals) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-50, 50);
+  PointCloud c;
+  c.origin = "random";
+  for (int i = 0; i < n; ++i) {
+    c.points.emplace_back(u(rng), u(rng), 0.2 * u(rng));
+    if (normals) c.normals.push_back(Eigen::Vector3d(u(rng), u(rng), u(rng) + 60).normalized());
+  }
+  return c;
+}
+
+// The message of the InputError `f` throws (fails the test if it does not throw one).
+template <class F>
+std::string error_of(F f) {
+  try {
+    f();
+  } catch (const drom::InputError& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "not an InputError: " << e.what();
+    return {};
+  }
+  ADD_FAILURE() << "no error";
+  return {};
+}
+
+#define EXPECT_ERROR(call, fragment)                                     \
+  do {                                                                   \
+    const std::string message = error_of([&] { (void)(call); });         \
+    EXPECT_NE(message.find(fragment), std::string::npos) << message;     \
+  } while (0)
+
+TEST(CloudReader, PlyRoundTripsInBinaryAndAscii) {
+  const PointCloud c = random_cloud(500, 1, true);
+  for (const bool binary : {true, false}) {
+    const std::string bytes = ply_bytes(c, {{"packet", std::vector<double>(500, 3), true}}, binary);
+    const PointCloud back = parse_ply(bytes, "round.ply");
+    ASSERT_EQ(back.size(), c.size());
+    ASSERT_TRUE(back.has_normals());
+    for (std::size_t i = 0; i < c.size(); ++i) {
+      EXPECT_EQ(back.points[i], c.points[i]);  // %.17g and binary doubles are exact
+      EXPECT_NEAR((back.normals[i] - c.normals[i]).norm(), 0, 1e-15);
+    }
+  }
+}
+
+TEST(CloudReader, ReadsBigEndianFloatPlyWithFacesBeforeTheVertices) {
+  // A face list element first (it must be skipped record by record), float vertices, big-endian.
+  std::string bytes = "ply\nformat binary_big_endian 1.0\ncomment made by hand\nelement face 2\nproperty list uchar int vertex_indices\n"
+                      "element vertex 2\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nend_header\n";
+  const auto put_be = [&](const void* data, std::size_t n) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (std::size_t k = 0; k < n; ++k) bytes.push_back(static_cast<char>(b[n - 1 - k]));
+  };
+  for (int face = 0; face < 2; ++face) {
+    bytes.push_back(3);
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t v = k;
+      put_be(&v, 4);
+    }
+  }
+  const float vertices[2][3] = {{1.5f, -2.0f, 3.25f}, {0.0f, 0.5f, -1.0f}};
+  for (const auto& v : vertices) {
+    for (const float x : v) put_be(&x, 4);
+    bytes.push_back(static_cast<char>(200));
+  }
+  const PointCloud c = parse_ply(bytes, "big.ply");
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.points[0], Eigen::Vector3d(1.5, -2.0, 3.25));
+  EXPECT_EQ(c.points[1], Eigen::Vector3d(0.0, 0.5, -1.0));
+  EXPECT_FALSE(c.has_normals());
+}
+
+TEST(CloudReader, ReadsXyzAndCsvWithHeadersCommentsAndNormals) {
+  const PointCloud a = parse_xyz("# scan\n1 2 3\n4\t5\t6\n\n7 8 9\n", "a.xyz");
+  ASSERT_EQ(a.size(), 3u);
+  EXPECT_EQ(a.points[1], Eigen::Vector3d(4, 5, 6));
+  const PointCloud b = parse_xyz("x,y,z,intensity\r\n1.5,-2,3e1,17\r\n+4,5,6,0\r\n", "b.csv");
+  ASSERT_EQ(b.size(), 2u);
+  EXPECT_EQ(b.points[0], Eigen::Vector3d(1.5, -2, 30));
+  const PointCloud c = parse_xyz("0 0 0 0 0 1\n1 0 0 0 0.6 0.8\n", "c.xyz");
+  ASSERT_TRUE(c.has_normals());
+  EXPECT_NEAR(c.normals[1].y(), 0.6, 1e-15);
+  const PointCloud d = parse_xyz("nz;x;ny;y;nx;z\n1;10;0;20;0;30\n", "d.txt");
+  EXPECT_EQ(d.points[0], Eigen::Vector3d(10, 20, 30));
+  EXPECT_EQ(d.normals[0], Eigen::Vector3d(0, 0, 1));
+  // A file on disk, scaled (the seed's 7/20).
+  const auto path = std::filesystem::temp_directory_path() / "drom_cloud_test.xyz";
+  std::ofstream(path) << "20 40 0\n";
+  EXPECT_NEAR(read_cloud(path, 7.0 / 20).points[0].x(), 7, 1e-12);
+  std::filesystem::remove(path);
+}
+
+TEST(CloudReader, RefusesMalformedInputNamingWhereAndWhat) {
+  EXPECT_ERROR(parse_xyz("", "empty.xyz"), "empty.xyz: the cloud has no point");
+  EXPECT_ERROR(parse_xyz("# only a comment\n", "c.xyz"), "no point");
+  EXPECT_ERROR(parse_xyz("1 2 3\n4 nan 6\n", "n.xyz"), "n.xyz: line 2: column 2: 'nan' is not a finite number");
+  EXPECT_ERROR(parse_xyz("1 2 3\n4 5 inf\n", "i.xyz"), "line 2: column 3");
+  EXPECT_ERROR(parse_xyz("1 2 3\n4 5\n", "short.xyz"), "short.xyz: line 2: expected 3 columns");
+  EXPECT_ERROR(parse_xyz("1 2\n", "two.xyz"), "expected at least 3 columns");
+  EXPECT_ERROR(parse_xyz("1 2 3\n4 5 abc\n", "word.xyz"), "line 2: column 3: expected a number, found 'abc'");
+  EXPECT_ERROR(parse_xyz("1 2 0x3\n", "hex.xyz"), "expected a number");
+  EXPECT_ERROR(parse_xyz("a,b,c\n1,2,3\n", "names.csv"), "names.csv: line 1: a header line must name the columns x, y and z");
+  EXPECT_ERROR(parse_xyz("x y z nx ny\n", "half.xyz"), "nx, ny and nz are named together");
+  EXPECT_ERROR(parse_xyz("1 2 3 255 0 0\n", "rgb.xyz"), "columns 4-6 are not a unit normal");
+  EXPECT_ERROR(parse_xyz("x y z nx ny nz\n0 0 0 0 0 0\n", "zero.xyz"), "line 2: the normal (0.000000, 0.000000, 0.000000) has no direction");
+  EXPECT_ERROR(parse_xyz(std::string("1 2 3\n4 5 \0 6\n", 13), "nul.xyz"), "line 2: a NUL byte");
+  EXPECT_ERROR(read_cloud("/nonexistent/cloud.ply"), "/nonexistent/cloud.ply: cannot open");
+  EXPECT_ERROR(read_cloud("/dev/null"), "/dev/null: the cloud file is empty");
+
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n";
+  EXPECT_ERROR(parse_ply(head + "end_header\n1 2\n3 4\n", "noz.ply"), "noz.ply: line 3: the vertex element has no property 'z'");
+  EXPECT_ERROR(parse_ply(head + "property float z\n", "noend.ply"), "noend.ply: the PLY header has no 'end_header' line");
+  EXPECT_ERROR(parse_ply(head + "property float z\nend_header\n1 2 3\n", "trunc.ply"), "trunc.ply: line 9: the data ends after 1 of the 2 'vertex' elements");
+  EXPECT_ERROR(parse_ply(head + "property float z\nend_header\n1 2 3\n1 nan 3\n", "nan.ply"), "nan.ply: line 9: vertex 1 has a coordinate that is not a finite number");
+  EXPECT_ERROR(parse_ply(head + "property float z\nend_header\n1 2 3 4\n1 2 3\n", "extra.ply"), "extra.ply: line 8: 'vertex' 0: 1 values more");
+  EXPECT_ERROR(parse_ply(head + "property quaternion z\nend_header\n", "type.ply"), "type.ply: line 6: unknown property type 'quaternion'");
+  EXPECT_ERROR(parse_ply("ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty double x\nproperty double y\nproperty double z\nend_header\n" +
+                             std::string(48, '\0'),
+                         "huge.ply"),
+               "huge.ply: byte 127: 1000000000 vertices of at least 24 bytes declared, but only 48 bytes follow the header");
+  EXPECT_ERROR(parse_ply("ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty double x\nproperty double y\nproperty double z\nend_header\n" +
+                             std::string(30, '\0'),
+                         "cut.ply"),
+               "cut.ply: byte 118: 2 vertices of at least 24 bytes declared, but only 30 bytes follow the header");
+  EXPECT_ERROR(parse_ply("ply\nformat ascii 1.0\nelement vertex 99999999999999999999\n", "count.ply"), "count.ply: line 3: element count");
+  EXPECT_ERROR(parse_ply("ply\nformat ascii 1.0\nend_header\n", "novertex.ply"), "declares no 'vertex' element");
+  EXPECT_ERROR(parse_ply("ply\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n", "nofmt.ply"), "no 'format' line");
+  EXPECT_ERROR(parse_ply("ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n", "zero.ply"), "zero.ply: the cloud has no point");
+  EXPECT_ERROR(parse_cloud("plywood 1 2\n", "notply.xyz"), "notply.xyz: line 1: column 1: expected a number, found 'plywood'");
+}
+
+TEST(CloudReader, TruncationsOfAValidFileNeverCrash) {
+  // Every prefix of a valid binary PLY with a list element: an error (or, at the full length, the cloud).
+  PointCloud c = random_cloud(20, 2, true);
+  const std::string full = ply_bytes(c, {{"id", std::vector<double>(20, 1), true}}, true);
+  int errors = 0;
+  for (std::size_t n = 0; n < full.size(); ++n) {
+    try {
+      parse_cloud(std::string_view(full).substr(0, n), "prefix.ply");
+    } catch (const drom::InputError&) {
+      ++errors;
+    }
+  }
+  EXPECT_EQ(errors, static_cast<int>(full.size()));
+  EXPECT_EQ(parse_cloud(full, "full.ply").size(), 20u);
+}
+
+TEST(PointCloud, FrameAlongTurnsTheAxisOntoZ) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g;
+  for (int k = 0; k < 200; ++k) {
+    Eigen::Vector3d axis(g(rng), g(rng), g(rng));
+    if (k == 0) axis = Eigen::Vector3d::UnitX();
+    if (k == 1) axis = -Eigen::Vector3d::UnitZ();
+    const Eigen::Matrix3d q = frame_along(axis);
+    EXPECT_NEAR((q * axis.normalized() - Eigen::Vector3d::UnitZ()).norm(), 0, 1e-14);
+    EXPECT_NEAR((q * q.transpose() - Eigen::Matrix3d::Identity()).norm(), 0, 1e-14);
+    EXPECT_NEAR(q.determinant(), 1, 1e-14);
+  }
+}
+
+TEST(CloudBins, QueriesAgreeWithBruteForce) {
+  const PointCloud c = random_cloud(20000, 4, false);
+  for (const double cell : {0.3, 1.7, 25.0}) {
+    const CloudBins bins(c.points, cell);
+    const CloudKdTree tree(c.points, 2);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-60, 60), r(0.1, 30);
+    std::vector<int> a, b;
+    for (int q = 0; q < 300; ++q) {
+      const double x = u(rng), y = u(rng), radius = r(rng), z = 0.2 * u(rng);
+      double top = -std::numeric_limits<double>::infinity();
+      bool above = false;
+      std::vector<int> brute;
+      for (std::size_t i = 0; i < c.size(); ++i) {
+        const double dx = c.points[i].x() - x, dy = c.points[i].y() - y, d2 = dx * dx + dy * dy;
+        if (d2 <= radius * radius) {
+          top = std::max(top, c.points[i].z());
+          brute.push_back(static_cast<int>(i));
+        }
+        if (d2 < radius * radius && c.points[i].z() > z) above = true;
+      }
+      EXPECT_EQ(bins.max_z_within(x, y, radius), top);
+      EXPECT_EQ(bins.any_above(x, y, radius, z), above);
+      bins.within(x, y, radius, a);
+      std::sort(a.begin(), a.end());
+      EXPECT_EQ(a, brute);
+      tree.within(Eigen::Vector3d(x, y, 0), radius, b);
+      std::sort(b.begin(), b.end());
+      EXPECT_EQ(b, brute);
+    }
+  }
+}
+
+TEST(CloudKdTree, NearestNeighboursAgreeWithBruteForce) {
+  const PointCloud c = random_cloud(5000, 6, false);
+  const CloudKdTree tree(c.points, 3);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-60, 60);
+  std::vector<int> found;
+  std::vector<double> d2;
+  for (int q = 0; q < 100; ++q) {
+    const Eigen::Vector3d p(u(rng), u(rng), 0.2 * u(rng));
+    std::vector<std::pair<double, int>> all;
+    for (std::size_t i = 0; i < c.size(); ++i) all.emplace_back((c.points[i] - p).squaredNorm(), static_cast<int>(i));
+    std::sort(all.begin(), all.end());
+    tree.nearest(p, 8, found, d2);
+    ASSERT_EQ(found.size(), 8u);
+    for (int k = 0; k < 8; ++k) EXPECT_NEAR(d2[static_cast<std::size_t>(k)], all[static_cast<std::size_t>(k)].first, 1e-9);
+    EXPECT_EQ(tree.nearest(p), all[0].second);
+  }
+}
+
+TEST(CloudVoxelMap, BarycentresAndPlaneNormalsOfItsVoxels) {
+  // A tilted plane sampled densely: every full voxel's barycentre lies on it, and its least-squares
+  // normal is the plane's (up to sign).
+  const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.2, 1).normalized();
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 200; ++i)
+    for (int j = 0; j < 200; ++j) {
+      const double x = 0.05 * i + 0.013, y = 0.05 * j + 0.007;
+      points.emplace_back(x, y, (5 - n.x() * x - n.y() * y) / n.z());
+    }
+  const CloudVoxelMap map(points, 1.0);
+  const auto voxels = map.voxels();
+  ASSERT_GT(voxels.size(), 100u);
+  int counted = 0;
+  for (const auto& v : voxels) {
+    counted += v.count;
+    EXPECT_NEAR(n.dot(v.barycentre), 5, 1e-9);
+    if (v.count >= 20) {
+      EXPECT_NEAR(std::abs(v.normal.dot(n)), 1, 1e-9);
+    }
+    EXPECT_TRUE(map.full(v.barycentre));
+  }
+  EXPECT_EQ(counted, 40000);
+  EXPECT_EQ(map.full_voxels(), voxels.size());
+  EXPECT_FALSE(map.full(Eigen::Vector3d(100, 100, 100)));
+}
+
+}  // namespace

@@ -1,0 +1,138 @@
+// Parallel-plane passes: the seed's simulated times and lengths (Tables 2.1, 2.3, 2.5; issue 22,
+// check 3) in the seed's step-over model and accounting, the exact variant against the fast one,
+// CL points, and the scallop the finished path leaves, simulated without the step-over model
+// (check 6).
+#include "paths/finishing_plan.hpp"
+#include "paths/pca.hpp"
+#include "paths/scallop_check.hpp"
+#include "paths/surface_samples.hpp"
+#include "tests/geometry/test_surfaces.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace {
+
+using namespace drom::paths;
+constexpr double kDeg = std::numbers::pi / 180;
+const Tool kTorus{ToolKind::torus, 5, 2}, kBall{ToolKind::ball, 5, 5};
+
+drom::geometry::NurbsSurface inclined_plane() {
+  const double c = std::cos(60 * kDeg), s = std::sin(60 * kDeg);
+  return drom::geometry::NurbsSurface::bezier(2, 2, {{0, 0, 0}, {0, 56, 0}, {28 * c, 0, 28 * s}, {28 * c, 56, 28 * s}});
+}
+
+// One zone, one tool and direction; the seed's model and accounting unless told otherwise.
+FinishingPlan finish_whole(const drom::geometry::NurbsSurface& s, const Tool& tool, double azimuth, StepoverModel model = StepoverModel::seed, bool exact = false) {
+  const MachiningMesh mesh = build_machining_mesh(s, {}, 0.5, 80, 80);
+  Zones zones;
+  zones.zone.assign(6400, 0);
+  zones.cluster = {0};
+  FinishingSettings fs;
+  fs.tool = tool;
+  fs.stepover = model;
+  fs.exact = exact;
+  fs.accounting = Accounting::seed;
+  ZoneSetup setup;
+  setup.azimuth = azimuth;
+  return plan_finishing(mesh, zones, {setup}, fs);
+}
+
+void expect_within(double value, double reference, double relative, const std::string& what) {
+  EXPECT_LE(std::abs(value - reference), relative * reference) << what << ": " << value << " against the seed's " << reference;
+}
+
+TEST(SeedTables, InclinedPlaneTable21) {
+  const auto torus = finish_whole(inclined_plane(), kTorus, 0), ball = finish_whole(inclined_plane(), kBall, 90 * kDeg);
+  expect_within(torus.time(), 43.8, 0.03, "torus along the slope, time");
+  expect_within(torus.length(), 2460, 0.03, "torus along the slope, length");
+  expect_within(ball.time(), 36.8, 0.03, "ball along the principal direction, time");
+  expect_within(ball.length(), 2459, 0.03, "ball along the principal direction, length");
+}
+
+TEST(SeedTables, RubioTable23AndChoiTable25) {
+  for (const bool rubio : {true, false}) {
+    const auto s = rubio ? drom::tests::rubio_surface() : drom::tests::choi_surface();
+    const PcaPlane p = pca_plane(sample_surface(s, {}, 80, 80).points);
+    const auto torus = finish_whole(s, kTorus, p.steepest_azimuth), ball = finish_whole(s, kBall, p.principal_azimuth);
+    const std::string name = rubio ? "Rubio" : "Choi";
+    expect_within(torus.time(), rubio ? 91.3 : 71.8, 0.03, name + " torus along the steepest slope, time");
+    expect_within(torus.length(), rubio ? 5606 : 4725, 0.03, name + " torus along the steepest slope, length");
+    expect_within(ball.time(), rubio ? 79.7 : 76.8, 0.03, name + " ball along the principal direction, time");
+    expect_within(ball.length(), rubio ? 5687 : 5184, 0.03, name + " ball along the principal direction, length");
+  }
+}
+
+TEST(Passes, ExactVariantPutsContactPointsOnTheSurfaceAndPlane) {
+  const auto s = drom::tests::rubio_surface();
+  const auto fast = finish_whole(s, kBall, -10 * kDeg, StepoverModel::curved, false), exact = finish_whole(s, kBall, -10 * kDeg, StepoverModel::curved, true);
+  const Eigen::Vector3d m(-std::sin(-10 * kDeg), std::cos(-10 * kDeg), 0);
+  double worst_plane = 0;
+  for (const auto& p : exact.zones[0].passes)
+    for (const auto& q : p.cc) worst_plane = std::max(worst_plane, std::abs(m.dot(q) - p.level));
+  EXPECT_LT(worst_plane, 1e-9);
+  // The fast variant's points lie on mesh chords, within the chords' sagitta of the surface; both plan
+  // nearly the same passes.
+  EXPECT_NEAR(static_cast<double>(exact.pass_count()), static_cast<double>(fast.pass_count()), 0.05 * fast.pass_count());
+  EXPECT_NEAR(exact.length(), fast.length(), 0.03 * fast.length());
+}
+
+TEST(Passes, CutterLocationTouchesTheSurface) {
+  // A ball's tip sits R below its centre, the centre R from the contact along the normal; a torus's
+  // tube centre r from the contact, its axis R - r further towards the normal's horizontal part.
+  const Eigen::Vector3d cc(1, 2, 3), n = Eigen::Vector3d(0.6, 0, 0.8), z = Eigen::Vector3d::UnitZ();
+  EXPECT_LT((cutter_location(cc, n, kBall, z) - (cc + 5 * n - 5 * z)).norm(), 1e-12);
+  const Eigen::Vector3d tip = cutter_location(cc, n, kTorus, z);
+  const Eigen::Vector3d tube = tip + 2 * z + 3 * Eigen::Vector3d(-1, 0, 0);  // back from the axis to the tube centre
+  EXPECT_NEAR((tube - cc).norm(), 2, 1e-12);
+  EXPECT_LT(((tube - cc).normalized() - n).norm(), 1e-12);
+}
+
+// Check 6: the material left, simulated along the normals, on strips across the passes.
+double worst_scallop(const drom::geometry::NurbsSurface& s, const Tool& tool, double azimuth, StepoverModel model, bool exact, double* gouge = nullptr) {
+  const auto plan = finish_whole(s, tool, azimuth, model, exact);
+  double worst = 0, deepest = 0;
+  // Three strips across the passes (the passes run near the azimuth; u runs along X on both surfaces).
+  const bool along_u = std::abs(std::cos(azimuth)) < std::abs(std::sin(azimuth));
+  const int across = tool.kind == ToolKind::ball ? 900 : 400;  // the bull-nose's swept disk costs more per point
+  for (const double at : {0.35, 0.7}) {
+    const auto c = along_u ? check_scallop(s, plan.zones, tool, 0.2, 0.8, at, at + 0.01, across, 2) : check_scallop(s, plan.zones, tool, at, at + 0.01, 0.2, 0.8, 2, across);
+    worst = std::max(worst, c.max_height);
+    deepest = std::max(deepest, c.max_gouge);
+  }
+  if (gouge) *gouge = deepest;
+  return worst;
+}
+
+TEST(ScallopBound, CurvedStepoverKeepsItOnBothSurfacesWithBothTools) {
+  for (const bool rubio : {true, false}) {
+    const auto s = rubio ? drom::tests::rubio_surface() : drom::tests::choi_surface();
+    const PcaPlane p = pca_plane(sample_surface(s, {}, 80, 80).points);
+    for (const bool ball : {true, false}) {
+      double gouge = 0;
+      const double h = worst_scallop(s, ball ? kBall : kTorus, ball ? p.principal_azimuth : p.steepest_azimuth, StepoverModel::curved, true, &gouge);
+      const std::string name = std::string(rubio ? "rubio_" : "choi_") + (ball ? "ball" : "torus");
+      RecordProperty(name + "_max_scallop_mm", testing::PrintToString(h));
+      EXPECT_LE(h, 0.01) << name;
+      EXPECT_GT(h, 0.007) << name << ": the bound is used, not wasted";
+      EXPECT_LT(gouge, 2e-4) << "no gouge beyond the chord tolerance";
+    }
+  }
+}
+
+TEST(ScallopBound, TheSeedsFlatStepoverExceedsItOnConvexGround) {
+  // Rubio bends away from a ball fed along its principal direction: eq. 2.3's step leaves more than
+  // sh; the seed's worst-point convention (the step at one point of the pass) twice as much.
+  const auto s = drom::tests::rubio_surface();
+  const PcaPlane p = pca_plane(sample_surface(s, {}, 80, 80).points);
+  const double flat = worst_scallop(s, kBall, p.principal_azimuth, StepoverModel::flat, true);
+  const double seed = worst_scallop(s, kBall, p.principal_azimuth, StepoverModel::seed, false);
+  RecordProperty("flat_max_scallop_mm", testing::PrintToString(flat));
+  RecordProperty("seed_max_scallop_mm", testing::PrintToString(seed));
+  EXPECT_GT(flat, 0.0102);
+  EXPECT_GT(seed, 0.013);
+}
+
+}  // namespace
