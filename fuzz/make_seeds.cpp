@@ -6,16 +6,32 @@
 // harnesses). Deterministic: the same tree gives the same seeds.
 #include "case/case.hpp"
 #include "fem/residual_stress.hpp"
+#include "geometry/cloud_writer.hpp"
 #include "levelset/gcode.hpp"
 #include "machine/cl_data.hpp"
 #include "machine/machine_definition.hpp"
 #include "machine/post_processor.hpp"
+#include "machine/rs274_reader.hpp"
 #include "offline/offline_job.hpp"
 #include "offline/part_setup.hpp"
+#include "paths/copy_settings.hpp"
 #include "reduce/database_reduction.hpp"
 #include "reduce/deviation_family.hpp"
 #include "support/atomic_file.hpp"
 
+#include <BRepBuilderAPI_MakeEdge.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakePolygon.hxx>
+#include <BRepBuilderAPI_MakeVertex.hxx>
+#include <Geom_BezierSurface.hxx>
+#include <Interface_Static.hxx>
+#include <Message.hxx>
+#include <Message_Messenger.hxx>
+#include <STEPControl_Writer.hxx>
+#include <TColgp_Array2OfPnt.hxx>
+#include <gp_Pln.hxx>
+
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -108,6 +124,31 @@ std::string binary_stl(const std::vector<std::array<Eigen::Vector3d, 3>>& tris) 
   return s;
 }
 
+// A shape as STEP bytes (OpenCASCADE's writer, through a file: it writes to paths only).
+std::string step_bytes(const TopoDS_Shape& shape, const fs::path& scratch) {
+  Message::DefaultMessenger()->ChangePrinters().Clear();
+  STEPControl_Writer writer;
+  if (writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone || writer.Write(scratch.string().c_str()) != IFSelect_RetDone)
+    throw std::runtime_error("OpenCASCADE could not write the STEP seed " + scratch.string());
+  std::ifstream in(scratch, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  fs::remove(scratch);
+  return s.str();
+}
+
+// A sphere cap of radius 38.25 mm (the seed's 76.5 mm sphere) sampled on a 6 x 6 grid, with outward normals.
+geometry::PointCloud sphere_cap() {
+  geometry::PointCloud cloud;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) {
+      const Eigen::Vector3d n = Eigen::Vector3d(0.12 * (i - 2.5), 0.12 * (j - 2.5), 1).normalized();
+      cloud.points.push_back(38.25 * n);
+      cloud.normals.push_back(n);
+    }
+  return cloud;
+}
+
 std::string file_text(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   std::ostringstream s;
@@ -143,6 +184,8 @@ int main(int argc, char** argv) {
       const auto box = box_triangles(c.length_x, c.length_y, c.thickness);
       put(corpus / "stl" / (std::string(name) + "_ascii.stl"), ascii_stl(box));
       put(corpus / "stl" / (std::string(name) + "_binary.stl"), binary_stl(box));
+      put(corpus / "stl_mesh" / (std::string(name) + "_ascii.stl"), ascii_stl(box));
+      put(corpus / "stl_mesh" / (std::string(name) + "_binary.stl"), binary_stl(box));
     }
     put(corpus / "case_overrides" / "docs", "sensor.noise=0\nrun.scale=seed\nmesh.nx=20\nmesh.ny=20\nclamps.0.box=[0,100,0,100]\ncontrol.correct=false\n");
     put(corpus / "gcode" / "arcs_inch.nc", "G20 G90 G17\nG0 X0 Y0 Z0.2\nG1 Z-0.05 F20\nG2 X1 Y1 I1 J0\nG3 X0 Y2 R1\nG91 G1 X-0.5\nG90 G43 H2 G0 Z1\nG49 M30\n");
@@ -151,6 +194,18 @@ int main(int argc, char** argv) {
                                                "G19 G3 Y-10 Z9 J0 K5\nG61.1 G4 P0.5\nM30\n");
     put(corpus / "gcode_rs274" / "parameters.ngc", "G21 G90\n#1 = 5\nG0 X0 Y0 Z[#1 * 2]\no100 repeat [3]\n  G91 G1 X#1 F300\no100 endrepeat\nG90 G2 X0 Y0 I-5 J0\nM2\n");
     put(corpus / "gcode_rs274" / "arcs_inch.nc", file_text(corpus / "gcode" / "arcs_inch.nc"));
+    // rs274's own output on those programs and on one it refuses (an arc without its centre), for the
+    // in-process harness of drom's side (rs274_calls); skipped where LinuxCNC is not installed.
+    if (machine::rs274_available()) {
+      fs::create_directories(base);
+      put(base / "refused.ngc", "G21 G90\nG0 X0 Y0\nG2 X10 Y10 F100\nM2\n");
+      for (const fs::path& program : {corpus / "gcode_rs274" / "parameters.ngc", corpus / "gcode_rs274" / "arcs_inch.nc", corpus / "gcode" / "helix_planes.nc", base / "refused.ngc"}) {
+        const machine::Rs274Run run = machine::run_rs274(program);
+        const char status = static_cast<char>(run.status == 0 ? 0 : run.status > 128 ? 255 : std::min(199 + run.status, 254));
+        put(corpus / "rs274_calls" / program.filename(), std::string(1, status) + run.calls);
+      }
+      fs::remove(base / "refused.ngc");
+    }
     for (const auto& machine_file : fs::directory_iterator(kMachines))
       if (machine_file.path().extension() == ".toml") put(corpus / "machine_file" / machine_file.path().filename(), file_text(machine_file.path()));
     const machine::ClProgram cl = machine::parse_apt_cl(kAptSeed, "seed.apt");
@@ -163,6 +218,34 @@ int main(int argc, char** argv) {
     for (int i = 0; i <= 5; ++i)
       for (int j = 0; j <= 5; ++j) surface << 20.0 * i << "," << 20.0 * j << "," << reduce::seed_true_surface(20.0 * i, 20.0 * j) << "\n";
     put(corpus / "measured_surface" / "seed_blank.csv", surface.str());
+
+    // The toolpath side (issues 22-24): clouds, STEP faces, finishing/copy/orientation cases.
+    const geometry::PointCloud cap = sphere_cap();
+    geometry::PointCloud bare = cap;
+    bare.normals.clear();
+    put(corpus / "cloud" / "cap_binary.ply", geometry::ply_bytes(cap, {}, true));
+    put(corpus / "cloud" / "cap_ascii.ply", geometry::ply_bytes(bare, {}, false));
+    std::ostringstream xyz, csv;
+    csv << "x,y,z,nx,ny,nz\n";
+    for (std::size_t i = 0; i < cap.size(); ++i) {
+      xyz << cap.points[i].x() << " " << cap.points[i].y() << " " << cap.points[i].z() << "\n";
+      csv << cap.points[i].x() << "," << cap.points[i].y() << "," << cap.points[i].z() << "," << cap.normals[i].x() << "," << cap.normals[i].y() << "," << cap.normals[i].z() << "\n";
+    }
+    put(corpus / "cloud" / "cap.xyz", xyz.str());
+    put(corpus / "cloud" / "cap_normals.csv", csv.str());
+    TColgp_Array2OfPnt poles(1, 3, 1, 3);
+    for (int i = 1; i <= 3; ++i)
+      for (int j = 1; j <= 3; ++j) poles.SetValue(i, j, gp_Pnt(40.0 * (i - 1), 22.5 * (j - 1), (i == 2 && j == 2) ? 30.0 : 5.0 * i));
+    const fs::path step_scratch = base / "seed.step";
+    fs::create_directories(base);
+    put(corpus / "step_face" / "bezier.step", step_bytes(BRepBuilderAPI_MakeFace(new Geom_BezierSurface(poles), 1e-7).Face(), step_scratch));
+    BRepBuilderAPI_MakePolygon triangle(gp_Pnt(0, 0, 2), gp_Pnt(10, 0, 2), gp_Pnt(0, 10, 2), Standard_True);
+    put(corpus / "step_face" / "trimmed_plane.step", step_bytes(BRepBuilderAPI_MakeFace(gp_Pln(gp_Pnt(0, 0, 2), gp_Dir(0, 0, 1)), triangle.Wire()).Face(), step_scratch));
+    put(corpus / "step_face" / "vertex_only.step", step_bytes(BRepBuilderAPI_MakeVertex(gp_Pnt(1, 2, 3)).Vertex(), step_scratch));
+    for (const char* name : {"rubio", "choi", "inclined_plane"}) put(corpus / "path_cases" / (std::string("finish_") + name), std::string(1, char(0)) + file_text(kCases / (std::string(name) + ".toml")));
+    put(corpus / "path_cases" / "copy_default", std::string(1, char(1)) + paths::default_copy_settings());
+    for (const char* name : {"orient_bump", "orient_corner", "orient_impeller", "orient_panel"})
+      put(corpus / "path_cases" / name, std::string(1, char(2)) + file_text(kCases / (std::string(name) + ".toml")));
 
     // The flat plate's coarse database and model: 5 x 5 x 5 Hex20, a station every 300 mm.
     const cases::Case coarse = cases::load_case(kCases / "flat_plate.toml",

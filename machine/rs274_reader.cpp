@@ -162,7 +162,7 @@ int line_of(long long n) { return n >= kLineBase ? static_cast<int>(n - kLineBas
 
 bool rs274_available(const Rs274Options& options) { return !find_executable(options).empty(); }
 
-NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& options) {
+Rs274Run run_rs274(const fs::path& program_path, const Rs274Options& options) {
   const std::string origin = program_path.string();
   std::ifstream in(program_path);
   if (!in) throw InputError(origin + ": cannot open program");
@@ -198,8 +198,19 @@ NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& opti
   if (status == -1)
     throw InputError(origin + ": LinuxCNC's interpreter did not finish within " + std::to_string(options.timeout.count()) +
                      " s: an endless loop (O-word while/do/repeat)?");
+  std::ifstream in_calls(output, std::ios::binary);
+  std::ostringstream calls;
+  calls << in_calls.rdbuf();
+  return {calls.str(), status};
+}
 
-  std::ifstream canon(output);
+NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& options) {
+  const Rs274Run run = run_rs274(program_path, options);
+  return parse_rs274_calls(run.calls, run.status, program_path.string());
+}
+
+NcProgram parse_rs274_calls(std::string_view calls, int status, const std::string& origin) {
+  std::istringstream canon{std::string(calls)};
   NcProgram program;
   program.origin = origin;
   program.reader = "rs274";
