@@ -180,6 +180,37 @@ TEST(ProgramReader, HostileNumbersAreRefusedByName) {
   EXPECT_EQ(message("G0 X0 Y0 Z0\nG1 A1000001 F100\n"), "prog.nc:2: word A1000001 is beyond any machine (|value| <= 1e6)");
 }
 
+// Fuzz findings on drom's side of rs274 (fuzz/rs274_calls.cpp, docs/robustness.md): what the
+// interpreter prints is read as outside data too.
+TEST(ProgramReader, HostileInterpreterOutputIsAClearErrorNamingTheProgram) {
+  using drom::machine::parse_rs274_calls;
+  const std::string head = "executing\n    1 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n";
+  // A line number beyond any number (std::stoll threw std::out_of_range): no line of the program.
+  const auto program = parse_rs274_calls(head + "    2 N2222222222222222222222222222SET_FEED_RATE(300.0000)\n"
+                                                "    3 N100000002STRAIGHT_FEED(5.0000, 0.0000, 1.0000, 0.0000, 0.0000, 0.0000)\n",
+                                         0, "hostile.ngc");
+  ASSERT_EQ(program.moves.size(), 1u);
+  EXPECT_EQ(program.moves[0].line, 2);
+  const auto error = [](const std::string& calls, int status) -> std::string {
+    try {
+      parse_rs274_calls(calls, status, "hostile.ngc");
+    } catch (const drom::InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  // A coordinate past a double: infinite, never a position.
+  EXPECT_EQ(error(head + "    2 N100000003STRAIGHT_FEED(1e999, 0.0000, 1.0000, 0.0000, 0.0000, 0.0000)\n", 0),
+            "hostile.ngc:3: rs274 printed STRAIGHT_FEED with a value beyond any finite number: 1e999, 0.0000, 1.0000, 0.0000, 0.0000, 0.0000");
+  // Words are not numbers ("inf" and "nan" are not read as such); too few values is refused.
+  EXPECT_EQ(error(head + "    2 N100000003STRAIGHT_FEED(inf, nan, 1.0000)\n", 0), "hostile.ngc:3: rs274 printed STRAIGHT_FEED with 1 values");
+  // A comment may hold any text.
+  EXPECT_NO_THROW(parse_rs274_calls(head + "    2 N100000003COMMENT(\"inf 1e999 nan\")\n", 0, "hostile.ngc"));
+  // An interpreter that stopped names its complaint and the line.
+  EXPECT_EQ(error(head + "    2 N100000004STRAIGHT_TRAVERSE(1.0000, 0.0000, 1.0000, 0.0000, 0.0000, 0.0000)\nBad character used\nN100000004 G1 X1 @\n", 1),
+            "hostile.ngc:4: LinuxCNC's interpreter: Bad character used");
+}
+
 TEST(ProgramReader, RotaryWordsOnAThreeAxisMachineNameTheLine) {
   const NcProgram p = parse_plain_gcode("G21 G90\nG0 X0 Y0 Z5\nG1 X10 F100\nG1 X20 A30\n", "five.ngc");
   try {
