@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 
 namespace drom::reduce {
 
@@ -48,10 +49,23 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   DatabaseReduction out;
   out.database = db_path;
   out.case_name = h5.text_attribute("case_name");
+  // Displacements per unit profile (mm) and times (s) from a real job are far inside these bounds;
+  // finite values near 1e300 would overflow the POD's products into infinities (finding 17).
+  constexpr double kMostMagnitude = 1e7;
+  const auto bounded = [&](const Eigen::MatrixXd& m, const std::string& name) {
+    if (m.size() == 0 || m.cwiseAbs().maxCoeff() <= kMostMagnitude) return;
+    std::ostringstream largest;
+    largest << m.cwiseAbs().maxCoeff();
+    throw InputError(db_path.string() + ": dataset '" + name + "' holds a value of magnitude " + largest.str() +
+                     ", beyond any displacement (mm) or time (s) of a job (|value| <= 1e7)");
+  };
   SnapshotDatabase db;
   db.B1 = read_finite_matrix(h5, "B1");
+  bounded(db.B1, "B1");
   db.station_times = read_finite_matrix(h5, "station_time");
+  bounded(db.station_times, "station_time");
   const Eigen::MatrixXd B2 = read_finite_matrix(h5, "B2"), xyz = read_finite_matrix(h5, "node_coordinates");
+  bounded(B2, "B2"), bounded(xyz, "node_coordinates");
   const Eigen::MatrixXd pocket = read_finite_matrix(h5, "pocket");
   if (xyz.cols() != 3) throw InputError(db_path.string() + ": node_coordinates: 3 columns expected");
   if (pocket.size() != 5) throw InputError(db_path.string() + ": pocket: x_min, y_min, length_x, length_y, depth expected");
@@ -160,7 +174,13 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   // The prior's mean: the case's own profile, the one the stock is expected to carry (a quenched
   // plate's skins are in compression, not as likely in tension: a zero mean would say they are).
   if (options.prior_mean_from_case && case_columns) settings.profile_mean = case_coefficients;
-  out.report = reduce_snapshots(db, settings, model);
+  try {
+    out.report = reduce_snapshots(db, settings, model);
+  } catch (const std::invalid_argument& e) {
+    // What the reduction refuses comes from the file's numbers: name the file (defence in depth
+    // behind the bounds above).
+    throw InputError(db_path.string() + ": its snapshots cannot be reduced: " + e.what());
+  }
   model.case_toml = h5.text_attribute("case");
   model.database_hash = h5.text_attribute("content_hash");
   return out;

@@ -35,6 +35,16 @@ std::vector<double> as_doubles(const std::vector<int>& v) { return {v.begin(), v
 
 Eigen::MatrixXd get(const Hdf5Reader& h5, const std::string& name) { return read_finite_matrix(h5, name); }
 
+// Points stored one per row (x, y, z), as a 3 x n matrix. The shape is checked first: Eigen does not
+// check a fixed-size assignment in release builds, and 4 columns overran the 3-row buffer (a
+// heap-buffer-overflow the model_fields fuzzer found, finding 16 in docs/robustness.md).
+Eigen::Matrix3Xd get_points(const Hdf5Reader& h5, const std::string& name) {
+  const Eigen::MatrixXd m = get(h5, name);
+  if (m.cols() != 3)
+    throw InputError(h5.path().string() + ": dataset '" + name + "' has " + std::to_string(m.cols()) + " columns, expected 3 (x, y, z per row)");
+  return m.transpose();
+}
+
 // Indices and counts are stored as numbers: each must be whole and within [min, max] before it is an int.
 int whole(const Hdf5Reader& h5, const std::string& name, double v, int min, int max) {
   if (!(v >= min && v <= max && v == std::floor(v)))
@@ -82,7 +92,7 @@ template <class Fail>
 void get_surface(const Hdf5Reader& h5, const std::string& name, const std::string& histories, int rank, const Eigen::VectorXd& times, const Fail& fail,
                  SurfaceMesh& mesh, Eigen::VectorXd& cut_time, std::vector<SpaceTimeField>& modes) {
   try {
-    mesh = SurfaceMesh(get(h5, name + "_nodes").transpose(), indices(h5, name + "_faces"), count(h5, name + "_face_nodes", 1, 27));
+    mesh = SurfaceMesh(get_points(h5, name + "_nodes"), indices(h5, name + "_faces"), count(h5, name + "_face_nodes", 1, 27));
   } catch (const std::invalid_argument& e) {
     throw fail(name + " surface: " + e.what());
   }
@@ -182,7 +192,7 @@ LightModel LightModel::read(const std::filesystem::path& file) {
     m.top_error_bound = measure(h5, "top_error_bound_mm");
     get_surface(h5, "top", "top_history", r, times, fail, m.top, m.top_cut_time, m.top_histories);
   }
-  m.shape_nodes = get(h5, "shape_nodes").transpose();
+  m.shape_nodes = get_points(h5, "shape_nodes");
   m.shape_faces = indices(h5, "shape_faces");
   m.final_basis = get(h5, "final_basis");
   if (m.final_basis.rows() != 3 * m.shape_nodes.cols() || m.final_basis.cols() != r) throw fail("final_basis: (3 x shape nodes) x rank expected");

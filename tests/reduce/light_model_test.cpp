@@ -162,5 +162,18 @@ TEST(LightModel, CountsAndNumbersFromTheFileAreCheckedBeforeUse) {
   const std::string nan = error_reading([&] { reduce::reduce_database(dir / "database.h5", {}); });
   EXPECT_NE(nan.find((dir / "database.h5").string() + ": dataset 'station_time' holds nan at row 1, column 0: finite numbers expected"), std::string::npos)
       << nan;
+  // Finding 17: finite but huge snapshots (1e300) overflowed the POD's products into infinities,
+  // again a std::invalid_argument. Every dataset is now bounded as it is read.
+  {
+    Hdf5Writer h5(dir / "huge.h5");
+    write_file_format(h5, kSnapshotDatabase);
+    h5.attribute("kind", std::string("offline"));
+    h5.attribute("case_name", std::string("x"));
+    h5.write("B1", std::vector<double>{1e300, 2, 3, 4}, 2, 2);
+    h5.commit();
+  }
+  const std::string huge = error_reading([&] { reduce::reduce_database(dir / "huge.h5", {}); });
+  EXPECT_EQ(huge.rfind((dir / "huge.h5").string() + ": dataset 'B1' holds a value of magnitude 1e+300, ", 0), 0u) << huge;
+  EXPECT_NE(huge.find("beyond any displacement (mm) or time (s) of a job (|value| <= 1e7)"), std::string::npos) << huge;
   std::filesystem::remove_all(dir);
 }
