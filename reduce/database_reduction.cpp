@@ -51,19 +51,26 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   out.case_name = h5.text_attribute("case_name");
   // Displacements per unit profile (mm) and times (s) from a real job are far inside these bounds;
   // finite values near 1e300 would overflow the POD's products into infinities (finding 17).
-  constexpr double kMostMagnitude = 1e7;
-  const auto bounded = [&](const Eigen::MatrixXd& m, const std::string& name) {
-    if (m.size() == 0 || m.cwiseAbs().maxCoeff() <= kMostMagnitude) return;
+  const auto bounded = [&](const Eigen::MatrixXd& m, const std::string& name, double most = 1e7,
+                           const std::string& what = "any displacement (mm) or time (s) of a job (|value| <= 1e7)") {
+    if (m.size() == 0 || m.cwiseAbs().maxCoeff() <= most) return;
     std::ostringstream largest;
     largest << m.cwiseAbs().maxCoeff();
-    throw InputError(db_path.string() + ": dataset '" + name + "' holds a value of magnitude " + largest.str() +
-                     ", beyond any displacement (mm) or time (s) of a job (|value| <= 1e7)");
+    throw InputError(db_path.string() + ": dataset '" + name + "' holds a value of magnitude " + largest.str() + ", beyond " + what);
   };
   SnapshotDatabase db;
   db.B1 = read_finite_matrix(h5, "B1");
   bounded(db.B1, "B1");
-  db.station_times = read_finite_matrix(h5, "station_time");
-  bounded(db.station_times, "station_time");
+  const Eigen::MatrixXd station_time = read_finite_matrix(h5, "station_time");
+  if (station_time.cols() != 1) throw InputError(db_path.string() + ": dataset 'station_time': one column (a time per station) expected");
+  bounded(station_time, "station_time");
+  db.station_times = station_time.col(0);
+  // Stations come in program order: two out of order (or at one instant) made the histories'
+  // interpolation divide by a zero or negative step, an infinite error bound accepted (finding 18).
+  for (Eigen::Index s = 1; s < db.station_times.size(); ++s)
+    if (!(db.station_times(s) > db.station_times(s - 1)))
+      throw InputError(db_path.string() + ": dataset 'station_time': station " + std::to_string(s) + " at " + std::to_string(db.station_times(s)) +
+                       " s does not follow station " + std::to_string(s - 1) + " at " + std::to_string(db.station_times(s - 1)) + " s: increasing program times expected");
   const Eigen::MatrixXd B2 = read_finite_matrix(h5, "B2"), xyz = read_finite_matrix(h5, "node_coordinates");
   bounded(B2, "B2"), bounded(xyz, "node_coordinates");
   const Eigen::MatrixXd pocket = read_finite_matrix(h5, "pocket");
@@ -164,6 +171,9 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   settings.history_tolerance = options.history_tolerance >= 0 ? options.history_tolerance : 0.5 * options.tolerance;
   // The case's coefficients in the database's column order, when they are its columns' profile.
   const Eigen::VectorXd case_coefficients = h5.has("case_coefficients") ? Eigen::VectorXd(read_finite_matrix(h5, "case_coefficients").reshaped()) : Eigen::VectorXd();
+  // The case's profile coefficients are stresses: -1.8e308 MPa made the prior's scale infinite and
+  // the model's error bound with it (finding 18).
+  bounded(case_coefficients, "case_coefficients", 1e4, "any residual stress (MPa) (|value| <= 1e4)");
   const bool case_columns = case_coefficients.size() > 0 && case_coefficients.size() == db.B1.cols();
   const double largest = case_coefficients.size() > 0 ? case_coefficients.cwiseAbs().maxCoeff() : 0.0;
   settings.profile_scale = options.profile_scale > 0 ? options.profile_scale : (largest > 0 ? largest : 50.0);

@@ -198,6 +198,11 @@ LightModel LightModel::read(const std::filesystem::path& file) {
   if (m.final_basis.rows() != 3 * m.shape_nodes.cols() || m.final_basis.cols() != r) throw fail("final_basis: (3 x shape nodes) x rank expected");
   m.path = get(h5, "path");
   if (m.path.cols() != 4) throw fail("path: 4 columns (x, y, z, program time) expected");
+  // A machine's travel and a program's length: 1e6 mm and 1e7 s bound any real one, and keep the
+  // cut-time index's arithmetic finite (finding 19).
+  if (m.path.size() > 0 && (m.path.leftCols(3).cwiseAbs().maxCoeff() > 1e6 || m.path.col(3).cwiseAbs().maxCoeff() > 1e7))
+    throw fail("path: positions within 1e6 mm and program times within 1e7 s expected");
+  if (m.tool_radius > 1e3) throw fail("tool_radius_mm: a tool radius up to 1000 mm expected");
   if (!m.final_basis.allFinite() || !m.prior_sd.allFinite()) throw fail("final_basis or prior_sd holds NaN or infinite values");
   return m;
 }
