@@ -103,6 +103,7 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   if (options.top_margin >= 0) {
     if (!h5.has("B1_top")) throw InputError(db_path.string() + ": no B1_top; run drom offline again for --top-margin");
     const Eigen::MatrixXd B1_top = read_finite_matrix(h5, "B1_top"), uvt = read_finite_matrix(h5, "top_parametric");
+    bounded(B1_top, "B1_top"), bounded(uvt, "top_parametric");
     const std::vector<int> top_ids = as_indices(read_finite_matrix(h5, "top_nodes"), xyz.rows(), db_path, "top_nodes");
     const auto ntop = static_cast<Eigen::Index>(top_ids.size());
     const Eigen::Index ns = db.station_times.size();
@@ -142,6 +143,7 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   // 3. Path, tool, and when each target node was cut.
   const Eigen::MatrixXd cutting = read_finite_matrix(h5, "path_cutting");
   model.path = read_finite_matrix(h5, "path_waypoints");
+  bounded(model.path, "path_waypoints");
   if (model.path.cols() != 4 || cutting.rows() != model.path.rows() || model.path.rows() < 2 || !model.path.allFinite())
     throw InputError(db_path.string() + ": path_waypoints / path_cutting: rows of x, y, z, t and one flag per row expected");
   std::vector<char> cut(static_cast<std::size_t>(cutting.rows()));

@@ -6,6 +6,9 @@
 #include "support/hdf5_writer.hpp"
 #include "support/input_error.hpp"
 
+#include <Eigen/Cholesky>
+
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -179,6 +182,11 @@ LightModel LightModel::read(const std::filesystem::path& file) {
     m.prior_covariance = get(h5, "prior_covariance");
     if (m.prior_covariance.rows() != r || m.prior_covariance.cols() != r || !m.prior_covariance.allFinite())
       throw fail("prior_covariance: a finite rank x rank matrix expected");
+    // A covariance: symmetric and positive definite, or the predictor cannot invert it (finding 20).
+    const double scale = std::max(1e-300, m.prior_covariance.cwiseAbs().maxCoeff());
+    if (r > 0 && ((m.prior_covariance - m.prior_covariance.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale ||
+                  Eigen::LLT<Eigen::MatrixXd>(m.prior_covariance).info() != Eigen::Success))
+      throw fail("prior_covariance: a symmetric positive definite matrix expected");
   }
   if (h5.has("prior_mean")) {
     m.prior_mean = get(h5, "prior_mean");
@@ -204,6 +212,7 @@ LightModel LightModel::read(const std::filesystem::path& file) {
     throw fail("path: positions within 1e6 mm and program times within 1e7 s expected");
   if (m.tool_radius > 1e3) throw fail("tool_radius_mm: a tool radius up to 1000 mm expected");
   if (!m.final_basis.allFinite() || !m.prior_sd.allFinite()) throw fail("final_basis or prior_sd holds NaN or infinite values");
+  if (r > 0 && !(m.prior_sd.array() > 0).all()) throw fail("prior_sd: standard deviations > 0 expected");
   return m;
 }
 
