@@ -40,6 +40,8 @@ inline const std::filesystem::path& scratch_dir() {
 // call, so a reader that reads by path sees exactly the input.
 inline std::filesystem::path as_file(const std::uint8_t* data, std::size_t size, const std::string& name) {
   const auto path = scratch_dir() / name;
+  std::error_code ignored;
+  std::filesystem::create_directories(scratch_dir(), ignored);  // again, should a cleaner have removed it
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd < 0) std::abort();
   for (std::size_t done = 0; done < size;) {

@@ -275,7 +275,7 @@ int main(int argc, char** argv) {
       put(corpus / harness / "unchanged", "");
       put(corpus / harness / "one_edit", std::string("\x02\x05\x01\x00", 4));
     }
-    // Findings 16-21 (docs/robustness.md), as the edit scripts that found them on this base: every
+    // Findings 16-23 (docs/robustness.md), as the edit scripts that found them on this base: every
     // smoke run replays them first. 16: a point dataset given a fourth column (a heap overflow in the
     // model reader); 17: snapshots made huge (the POD's std::invalid_argument); 18: a case coefficient
     // of -1.8e308 MPa (an infinite error bound accepted); 19: a path far out (a cut-time grid past an int).
@@ -287,6 +287,10 @@ int main(int argc, char** argv) {
     // stock top's snapshots made huge (an overflow to an empty POD block: UBSan).
     put(corpus / "model_fields" / "finding_20", std::string("\xb1\x12", 2));
     put(corpus / "database_fields" / "finding_21", std::string("\xfe\xff", 2));
+    // 22: a model surface node far off (a bucket index past an int: UBSan); 23: surface faces of one
+    // node (the mesh's std::invalid_argument).
+    put(corpus / "model_fields" / "finding_22", std::string("\xff\x04\xfe\xff", 4));
+    put(corpus / "database_fields" / "finding_23", std::string("\xfc\xff\x7e\xf9", 4));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "drom_fuzz_seeds: %s\n", e.what());
     return 1;

@@ -36,7 +36,11 @@ SurfaceMesh surface(const Eigen::MatrixXd& xyz, const std::vector<int>& nodes, c
   Eigen::Matrix3Xd points(3, static_cast<Eigen::Index>(nodes.size()));
   for (std::size_t i = 0; i < nodes.size(); ++i) points.col(static_cast<Eigen::Index>(i)) = xyz.row(nodes[i]).transpose();
   if (faces.rows() == 0) throw InputError(file.string() + ": no face on the " + what);
-  return SurfaceMesh(points, as_indices(faces, static_cast<Eigen::Index>(nodes.size()), file, what + " faces"), static_cast<int>(faces.cols()));
+  try {
+    return SurfaceMesh(points, as_indices(faces, static_cast<Eigen::Index>(nodes.size()), file, what + " faces"), static_cast<int>(faces.cols()));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(file.string() + ": the " + what + ": " + e.what());  // finding 23: faces of 1 node
+  }
 }
 
 }  // namespace

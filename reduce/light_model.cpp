@@ -45,6 +45,7 @@ Eigen::Matrix3Xd get_points(const Hdf5Reader& h5, const std::string& name) {
   const Eigen::MatrixXd m = get(h5, name);
   if (m.cols() != 3)
     throw InputError(h5.path().string() + ": dataset '" + name + "' has " + std::to_string(m.cols()) + " columns, expected 3 (x, y, z per row)");
+  if (m.size() > 0 && m.cwiseAbs().maxCoeff() > 1e6) throw InputError(h5.path().string() + ": dataset '" + name + "': positions within 1e6 mm expected");
   return m.transpose();
 }
 
