@@ -217,6 +217,7 @@ void read_closed_loop(TomlReader& r, Case& c) {
   c.correct = r.boolean("control.correct", c.correct);
   c.refresh_rate = r.real("control.refresh_rate", Range::closed(0.01, 10000), c.refresh_rate);
   c.max_offset_rate = r.real("control.max_offset_rate", Range::positive(), c.max_offset_rate);
+  c.max_offset = r.real("control.max_offset", Range::non_negative(), c.max_offset);
   c.learning_tolerance = r.real("control.learning_tolerance", Range::positive(), c.learning_tolerance);
   c.learning_window = static_cast<int>(r.integer("control.learning_window", 1, 10000, c.learning_window));
   c.reading_range = r.real("control.reading_range", Range::positive(), c.reading_range);

@@ -104,6 +104,7 @@ struct Case {
   bool correct = true;
   double refresh_rate = 10;          // Hz
   double max_offset_rate = 1;        // mm/s
+  double max_offset = 0;             // mm: bound on the commanded offset; 0: from the model's prior (online/predictor.hpp)
   double learning_tolerance = 0.01;  // mm
   int learning_window = 5;
   double reading_range = 1;          // mm

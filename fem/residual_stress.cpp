@@ -76,6 +76,7 @@ ProfileTable read_profile_table(const std::filesystem::path& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path.string() + ": cannot open stress profile table");
   ProfileTable table;
+  table.origin = path.string();
   std::string line;
   int line_no = 0;
   bool header_seen = false;
@@ -106,6 +107,10 @@ ProfileTable read_profile_table(const std::filesystem::path& path) {
       }
       if (!std::isfinite(values[count]))
         throw InputError(path.string() + ":" + std::to_string(line_no) + ": column " + std::to_string(count + 1) + " is not finite");
+      // 10 GPa: beyond any residual stress (and any depth) in a part drom machines; a corrupted value.
+      if (std::abs(values[count]) > 1e4)
+        throw InputError(path.string() + ":" + std::to_string(line_no) + ": column " + std::to_string(count + 1) + " is " + cell + ", beyond any " +
+                         (count == 0 ? "depth (mm)" : "stress (MPa)") + " (|value| <= 1e4)");
       ++count;
     }
     if (count != 3) throw InputError(path.string() + ":" + std::to_string(line_no) + ": expected 3 columns (depth, sigma11, sigma22), got " + std::to_string(count));
@@ -120,20 +125,26 @@ ProfileTable read_profile_table(const std::filesystem::path& path) {
 StressProfile fit_profile(const ProfileTable& table, double thickness, const std::vector<int>& degrees) {
   const auto rows = static_cast<Eigen::Index>(table.depth.size());
   const auto cols = static_cast<Eigen::Index>(degrees.size());
+  const std::string where = (table.origin.empty() ? std::string("stress profile table") : table.origin) + ": ";
   if (rows < cols)
-    throw InputError("stress profile table: " + std::to_string(rows) + " rows cannot determine " + std::to_string(cols) + " Legendre coefficients");
+    throw InputError(where + std::to_string(rows) + " rows cannot determine " + std::to_string(cols) + " Legendre coefficients");
   Eigen::MatrixXd A(rows, cols);
   Eigen::MatrixXd b(rows, 2);
   for (Eigen::Index i = 0; i < rows; ++i) {
     const double depth = table.depth[static_cast<std::size_t>(i)];
     if (depth < 0 || depth > thickness)
-      throw InputError("stress profile table: depth " + std::to_string(depth) + " mm lies outside the thickness [0, " + std::to_string(thickness) + "]");
+      throw InputError(where + "depth " + std::to_string(depth) + " mm lies outside the thickness [0, " + std::to_string(thickness) + "]");
     const double s = 1.0 - 2.0 * depth / thickness;  // depth is measured from the top face
     for (Eigen::Index k = 0; k < cols; ++k) A(i, k) = legendre(degrees[static_cast<std::size_t>(k)], s);
     b(i, 0) = table.sigma11[static_cast<std::size_t>(i)];
     b(i, 1) = table.sigma22[static_cast<std::size_t>(i)];
   }
-  const Eigen::MatrixXd coeffs = A.colPivHouseholderQr().solve(b);
+  // Repeated depths determine fewer coefficients than rows: the fit would then be one of many.
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  if (qr.rank() < cols)
+    throw InputError(where + "its depths determine only " + std::to_string(qr.rank()) + " of the " + std::to_string(cols) +
+                     " Legendre coefficients: give at least as many distinct depths");
+  const Eigen::MatrixXd coeffs = qr.solve(b);
   StressProfile p{degrees, {}, {}};
   for (Eigen::Index k = 0; k < cols; ++k) {
     p.sigma11.push_back(coeffs(k, 0));

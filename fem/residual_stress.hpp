@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace drom::fem {
@@ -40,6 +41,7 @@ Eigen::VectorXd profile_weights(const StressProfile& profile);
 // A measured profile: depth below the top face (mm) and the two principal stresses (MPa).
 struct ProfileTable {
   std::vector<double> depth, sigma11, sigma22;
+  std::string origin;  // the file, for messages
 };
 // CSV with header "depth,sigma11,sigma22"; errors name the file and line.
 ProfileTable read_profile_table(const std::filesystem::path& path);

@@ -24,6 +24,19 @@
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Wire.hxx>
 
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <functional>
 #include <sstream>
 
 namespace drom::geometry {
@@ -75,9 +88,7 @@ std::vector<double> knot_sequence(const Handle(Geom_BSplineSurface) & b, bool al
   return std::vector<double>(knots.begin(), knots.end());
 }
 
-}  // namespace
-
-int count_step_faces(const std::filesystem::path& path) {
+int count_faces_here(const std::filesystem::path& path) {
   try {
     return load_faces(path).Extent();
   } catch (const Standard_Failure& e) {
@@ -85,7 +96,7 @@ int count_step_faces(const std::filesystem::path& path) {
   }
 }
 
-StepFace read_step_face(const std::filesystem::path& path, int index) {
+StepFace read_face_here(const std::filesystem::path& path, int index) {
   try {
     const TopTools_IndexedMapOfShape faces = load_faces(path);
     if (index < 1 || index > faces.Extent())
@@ -126,6 +137,225 @@ StepFace read_step_face(const std::filesystem::path& path, int index) {
   } catch (const std::invalid_argument& e) {
     throw InputError(path.string() + ": face " + std::to_string(index) + " is not a valid patch: " + e.what());
   }
+}
+
+// ---- OpenCASCADE in a child process ----
+// OpenCASCADE's STEP translator is not hardened against malformed files: the fuzzer found a file on
+// which it dereferences a null entity (StepGeom_CartesianPoint::NbCoordinates, 7.6.3). A crash there
+// must not take drom (and a night's closed loop) down with it, so the file is read in a forked child
+// that sends back drom's own types as bytes; a child that dies or hangs becomes an InputError naming
+// the file. The parent checks what it receives as it would any outside data.
+
+class Bytes {
+ public:
+  void put(double x) { raw(&x, sizeof x); }
+  void put(std::int64_t n) { raw(&n, sizeof n); }
+  void put(const std::string& text) {
+    put(static_cast<std::int64_t>(text.size()));
+    bytes_ += text;
+  }
+  void put(const std::vector<double>& v) {
+    put(static_cast<std::int64_t>(v.size()));
+    for (const double x : v) put(x);
+  }
+  const std::string& str() const { return bytes_; }
+
+ private:
+  void raw(const void* p, std::size_t n) { bytes_.append(static_cast<const char*>(p), n); }
+  std::string bytes_;
+};
+
+class BytesReader {
+ public:
+  BytesReader(std::string_view bytes, std::string origin) : bytes_(bytes), origin_(std::move(origin)) {}
+  double number() {
+    double x = 0;
+    raw(&x, sizeof x);
+    if (!std::isfinite(x)) throw InputError(origin_ + ": OpenCASCADE's face holds a number that is not finite");
+    return x;
+  }
+  std::int64_t count(std::int64_t most) {
+    std::int64_t n = 0;
+    raw(&n, sizeof n);
+    if (n < 0 || n > most) throw InputError(origin_ + ": OpenCASCADE's face holds a count of " + std::to_string(n) + ", expected 0 to " + std::to_string(most));
+    return n;
+  }
+  std::string text() {
+    const auto n = static_cast<std::size_t>(count(4096));
+    need(n);
+    std::string t(bytes_.substr(at_, n));
+    at_ += n;
+    return t;
+  }
+  std::vector<double> numbers(std::int64_t most) {
+    std::vector<double> v(static_cast<std::size_t>(count(most)));
+    for (double& x : v) x = number();
+    return v;
+  }
+  bool done() const { return at_ == bytes_.size(); }
+
+ private:
+  void need(std::size_t n) const {
+    if (bytes_.size() - at_ < n) throw InputError(origin_ + ": OpenCASCADE's reader sent a cut answer");
+  }
+  void raw(void* p, std::size_t n) {
+    need(n);
+    std::memcpy(p, bytes_.data() + at_, n);
+    at_ += n;
+  }
+  std::string_view bytes_;
+  std::string origin_;
+  std::size_t at_ = 0;
+};
+
+// Bounds on what one face may hold: far above any CAD face, low enough that a damaged answer
+// cannot ask for gigabytes.
+constexpr std::int64_t kMostPoles = 1 << 22, kMostKnots = 1 << 16, kMostLoops = 1 << 16, kMostLoopPoints = 1 << 22;
+
+std::string encode(const StepFace& face) {
+  Bytes b;
+  const NurbsSurface& s = face.surface;
+  b.put(std::int64_t{s.degree_u()}), b.put(std::int64_t{s.degree_v()});
+  b.put(std::int64_t{s.count_u()}), b.put(std::int64_t{s.count_v()});
+  b.put(s.knots_u()), b.put(s.knots_v());
+  std::vector<double> xyz;
+  for (const auto& p : s.points()) xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
+  b.put(xyz);
+  b.put(s.is_rational() ? s.weights() : std::vector<double>{});
+  b.put(static_cast<std::int64_t>(face.trim.loops().size()));
+  for (const auto& loop : face.trim.loops()) {
+    std::vector<double> uv;
+    for (const auto& q : loop) uv.insert(uv.end(), {q.x(), q.y()});
+    b.put(uv);
+  }
+  b.put(face.source_type);
+  b.put(std::int64_t{face.reversed ? 1 : 0});
+  return b.str();
+}
+
+StepFace decode(std::string_view bytes, const std::string& origin, int index) {
+  BytesReader r(bytes, origin);
+  const auto degree_u = static_cast<int>(r.count(64)), degree_v = static_cast<int>(r.count(64));
+  const auto count_u = static_cast<int>(r.count(kMostPoles)), count_v = static_cast<int>(r.count(kMostPoles));
+  auto knots_u = r.numbers(kMostKnots), knots_v = r.numbers(kMostKnots);
+  const auto xyz = r.numbers(3 * kMostPoles);
+  auto weights = r.numbers(kMostPoles);
+  if (xyz.size() != 3 * static_cast<std::size_t>(count_u) * static_cast<std::size_t>(count_v))
+    throw InputError(origin + ": face " + std::to_string(index) + ": " + std::to_string(xyz.size() / 3) + " control points for a " + std::to_string(count_u) + " x " +
+                     std::to_string(count_v) + " net");
+  std::vector<Eigen::Vector3d> points;
+  for (std::size_t k = 0; k < xyz.size(); k += 3) points.emplace_back(xyz[k], xyz[k + 1], xyz[k + 2]);
+  std::vector<std::vector<Eigen::Vector2d>> loops(static_cast<std::size_t>(r.count(kMostLoops)));
+  for (auto& loop : loops) {
+    const auto uv = r.numbers(2 * kMostLoopPoints);
+    for (std::size_t k = 0; k + 1 < uv.size(); k += 2) loop.emplace_back(uv[k], uv[k + 1]);
+  }
+  StepFace face;
+  face.source_type = r.text();
+  face.reversed = r.count(1) == 1;
+  if (!r.done()) throw InputError(origin + ": OpenCASCADE's reader sent more than one face");
+  try {
+    face.surface = NurbsSurface(degree_u, degree_v, std::move(knots_u), std::move(knots_v), count_u, count_v, std::move(points), std::move(weights));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(origin + ": face " + std::to_string(index) + " is not a valid patch: " + e.what());
+  }
+  face.trim = TrimLoops(std::move(loops));
+  return face;
+}
+
+void write_all(int fd, const std::string& bytes) {
+  for (std::size_t done = 0; done < bytes.size();) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return;
+    done += static_cast<std::size_t>(n);
+  }
+}
+
+// `work` run in a child process: its answer's bytes, or its InputError rethrown here. A child that
+// crashes, stops without an answer or outlives `limit` is an InputError naming the file.
+std::string in_child_process(const std::filesystem::path& path, const std::function<std::string()>& work, std::chrono::seconds limit) {
+  const std::string origin = path.string();
+  int pipe_fds[2];
+  if (::pipe2(pipe_fds, O_CLOEXEC) != 0) throw InputError(origin + ": cannot start OpenCASCADE's reader: " + std::strerror(errno));
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(pipe_fds[0]), ::close(pipe_fds[1]);
+    throw InputError(origin + ": cannot start OpenCASCADE's reader: " + std::strerror(errno));
+  }
+  if (pid == 0) {
+    // The child dies of its own crash: no handler inherited from the parent (a fuzzer's, a
+    // sanitizer's) may report it as the parent's.
+    for (const int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) ::signal(sig, SIG_DFL);
+    ::close(pipe_fds[0]);
+    char kind = 'F';
+    std::string answer;
+    try {
+      answer = work();
+    } catch (const InputError& e) {
+      kind = 'E', answer = e.what();
+    } catch (const Standard_Failure& e) {
+      kind = 'E', answer = origin + ": OpenCASCADE could not read it: " + e.GetMessageString();
+    } catch (const std::exception& e) {
+      kind = 'E', answer = origin + ": OpenCASCADE's reader failed: " + e.what();
+    } catch (...) {
+      kind = 'E', answer = origin + ": OpenCASCADE's reader failed";
+    }
+    write_all(pipe_fds[1], std::string(1, kind) + answer);
+    ::_exit(0);
+  }
+  ::close(pipe_fds[1]);
+  std::string bytes;
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  bool timed_out = false;
+  for (char buffer[65536];;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now()).count();
+    if (left <= 0) {
+      timed_out = true;
+      break;
+    }
+    pollfd p{pipe_fds[0], POLLIN, 0};
+    const int ready = ::poll(&p, 1, static_cast<int>(std::min<long long>(left, 1000)));
+    if (ready < 0 && errno != EINTR) break;
+    if (ready <= 0) continue;
+    const ssize_t n = ::read(pipe_fds[0], buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    bytes.append(buffer, static_cast<std::size_t>(n));
+  }
+  ::close(pipe_fds[0]);
+  if (timed_out) ::kill(pid, SIGKILL);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (timed_out) throw InputError(origin + ": OpenCASCADE did not finish reading it within " + std::to_string(limit.count()) + " s");
+  if (WIFSIGNALED(status))
+    throw InputError(origin + ": OpenCASCADE crashed reading it (" + strsignal(WTERMSIG(status)) +
+                     "): the file is malformed, or holds an entity OpenCASCADE 7.6 cannot translate");
+  if (bytes.empty() || (bytes[0] != 'F' && bytes[0] != 'E'))
+    throw InputError(origin + ": OpenCASCADE's reader stopped without an answer (exit status " + std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + ")");
+  if (bytes[0] == 'E') throw InputError(bytes.substr(1));
+  return bytes.substr(1);
+}
+
+// A large assembly takes OpenCASCADE a minute or two; ten is a reader stuck.
+constexpr std::chrono::seconds kReadLimit{600};
+
+}  // namespace
+
+int count_step_faces(const std::filesystem::path& path) {
+  if (!std::filesystem::is_regular_file(path)) throw InputError(path.string() + ": no such STEP file");
+  const std::string answer = in_child_process(path, [&] { return std::to_string(count_faces_here(path)); }, kReadLimit);
+  int faces = 0;
+  std::istringstream in(answer);
+  if (!(in >> faces) || faces < 1) throw InputError(path.string() + ": OpenCASCADE's reader sent no face count");
+  return faces;
+}
+
+StepFace read_step_face(const std::filesystem::path& path, int index) {
+  if (!std::filesystem::is_regular_file(path)) throw InputError(path.string() + ": no such STEP file");
+  return decode(in_child_process(path, [&] { return encode(read_face_here(path, index)); }, kReadLimit), path.string(), index);
 }
 
 }  // namespace drom::geometry

@@ -15,6 +15,9 @@ namespace drom::levelset {
 
 namespace {
 
+// A pocket program of more moves than this (arcs split included) is no pocket: ~200 MB of moves.
+constexpr std::size_t kMostMoves = 2'000'000;
+
 // The pocket program's moves from machine/'s reader: arcs in the XY plane stay arcs (full turns
 // split into circles), arcs in XZ and YZ become chords within 1 µm, rotary axes are refused.
 Toolpath to_toolpath(const machine::NcProgram& program) {
@@ -55,6 +58,10 @@ Toolpath to_toolpath(const machine::NcProgram& program) {
     const double r0 = std::hypot(m.start[pl.first] - m.centre[pl.first], m.start[pl.second] - m.centre[pl.second]);
     const double r1 = std::hypot(m.end[pl.first] - m.centre[pl.first], m.end[pl.second] - m.centre[pl.second]);
     const double a0 = std::atan2(m.start[pl.second] - m.centre[pl.second], m.start[pl.first] - m.centre[pl.first]);
+    auto room_for = [&](double count) {
+      if (static_cast<double>(path.moves.size()) + count > static_cast<double>(kMostMoves))
+        throw InputError(where + "the program's moves (arcs split into turns and chords) pass " + std::to_string(kMostMoves) + ": no pocket program is that long");
+    };
     auto point = [&](double f) {
       Eigen::Vector3d p = m.start.head<3>() + f * (m.end.head<3>() - m.start.head<3>());
       const double r = r0 + f * (r1 - r0), a = a0 + f * sweep;
@@ -65,6 +72,7 @@ Toolpath to_toolpath(const machine::NcProgram& program) {
     if (m.plane == 17) {
       // One move per full turn, then the rest: Move describes at most one turn.
       const double turn = 2 * M_PI;
+      room_for(std::floor(std::abs(sweep) / turn) + 1);
       const int full = static_cast<int>(std::floor(std::abs(sweep) / turn - 1e-9));
       double done = 0;
       for (int k = 0; k <= full; ++k) {
@@ -82,6 +90,7 @@ Toolpath to_toolpath(const machine::NcProgram& program) {
     // XZ and YZ arcs as chords no farther than 1 µm from the arc.
     const double r = std::max(r0, r1);
     const double step = 2 * std::acos(std::max(-1.0, 1 - 1e-3 / std::max(r, 1e-9)));
+    room_for(std::ceil(std::abs(sweep) / step));
     const int n = std::max(1, static_cast<int>(std::ceil(std::abs(sweep) / step)));
     Eigen::Vector3d previous = m.start.head<3>();
     for (int k = 1; k <= n; ++k) {

@@ -237,6 +237,7 @@ online::PredictorSettings predictor_settings(const cases::Case& c, const reduce:
   s.learning_tolerance = c.learning_tolerance;
   s.learning_window = c.learning_window;
   s.max_offset_rate = c.max_offset_rate;
+  s.max_offset = c.max_offset;
   return s;
 }
 

@@ -41,9 +41,11 @@ double number(const std::string& s, const std::string& where, const std::string&
   try {
     v = std::stod(s, &used);
   } catch (const std::exception&) {
-    throw InputError(where + what + ": expected a number, got '" + s + "'");
+    throw InputError(where + what + ": expected a number, got '" + printable(s) + "'");
   }
-  if (used != s.size() || !std::isfinite(v)) throw InputError(where + what + ": expected a finite number, got '" + s + "'");
+  if (used != s.size() || !std::isfinite(v)) throw InputError(where + what + ": expected a finite number, got '" + printable(s) + "'");
+  // A kilometre, or 10^6 mm/min, is beyond any machine: a corrupted file (and squares stay finite).
+  if (std::abs(v) > 1e6) throw InputError(where + what + ": " + printable(s) + " is beyond any machine (|value| <= 1e6)");
   return v;
 }
 
@@ -109,7 +111,7 @@ ClProgram parse_apt_cl(const std::string& text, const std::string& origin) {
       if (!(feed > 0)) throw InputError(where + "FEDRAT must be positive");
       const std::string mode = args.size() > 1 ? upper(args[1]) : "MMPM";
       if (mode == "IPM") feed *= 25.4;
-      else if (mode != "MMPM") throw InputError(where + "FEDRAT mode '" + args[1] + "': expected MMPM or IPM (per-revolution feeds are not modelled)");
+      else if (mode != "MMPM") throw InputError(where + "FEDRAT mode '" + printable(args[1]) + "': expected MMPM or IPM (per-revolution feeds are not modelled)");
     } else if (major == "RAPID") {
       rapid_next = true;
     } else if (major == "UNITS") {
@@ -121,7 +123,7 @@ ClProgram parse_apt_cl(const std::string& text, const std::string& origin) {
       if (args.size() != 3) throw InputError(where + "TLAXIS needs i, j, k");
       axis = unit_axis({number(args[0], where, "i"), number(args[1], where, "j"), number(args[2], where, "k")}, where);
     } else if (std::find(std::begin(kInert), std::end(kInert), major) == std::end(kInert)) {
-      throw InputError(where + "CL statement '" + major + "' is not understood (motion: GOTO, FROM, RAPID, FEDRAT, UNITS, TLAXIS)");
+      throw InputError(where + "CL statement '" + printable(major) + "' is not understood (motion: GOTO, FROM, RAPID, FEDRAT, UNITS, TLAXIS)");
     }
   }
   if (!statement.empty()) throw InputError(origin + ":" + std::to_string(statement_line) + ": the file ends inside a statement continued with '$'");
@@ -143,7 +145,10 @@ ClProgram parse_cl_csv(const std::string& text, const std::string& origin) {
     const auto cells = split(line, ',');
     const std::string where = origin + ":" + std::to_string(line_no) + ": ";
     if (column.empty()) {
-      for (std::size_t c = 0; c < cells.size(); ++c) column[cells[c]] = c;
+      // A column named twice would leave column.size() short of the header's cells (a fuzz finding: a
+      // short row was then read past its end).
+      for (std::size_t c = 0; c < cells.size(); ++c)
+        if (!column.emplace(cells[c], c).second) throw InputError(where + "the CL table's header names column '" + printable(cells[c]) + "' twice");
       for (const char* need : {"x", "y", "z", "i", "j", "k", "feed"})
         if (!column.count(need)) throw InputError(where + "the CL table's header needs the columns x, y, z, i, j, k, feed; '" + need + "' is missing");
       continue;

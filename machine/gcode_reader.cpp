@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -42,9 +43,15 @@ std::size_t read_number(const std::string& s, std::size_t i, double& value) {
   std::string text = s.substr(start, i - start);
   if (text[0] == '+') text.erase(0, 1);
   const auto r = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (r.ec != std::errc()) return 0;
+  if (r.ec == std::errc::result_out_of_range) value = std::numeric_limits<double>::infinity();  // the caller's bounds refuse it
+  else if (r.ec != std::errc()) return 0;
   return i - start;
 }
+
+// Beyond any machine: a length, feed or dwell past it is a corrupted program (and squaring it, for an
+// arc, must stay finite); codes and registers are whole numbers of a few digits (G with one decimal).
+constexpr double kLargest = 1e6;
+constexpr int kMostTurns = 10000;  // an arc's P: a helix of more turns is no milling program
 
 std::string g_name(int g10) {
   char buf[16];
@@ -103,24 +110,39 @@ NcProgram parse_plain_gcode(const std::string& text, const std::string& origin) 
       }
       if (c == '/') outside("block delete '/'");
       if (c == '#' || c == '[' || c == 'O') outside(c == 'O' ? std::string("an O-word") : c == '#' ? std::string("a #parameter") : std::string("an [expression]"));
-      if (!std::isalpha(static_cast<unsigned char>(c))) outside("the character '" + std::string(1, line[i]) + "'");
+      if (!std::isalpha(static_cast<unsigned char>(c))) {
+        // A byte that is not text is no G-code at all (a binary file, a copy cut short).
+        const auto u = static_cast<unsigned char>(line[i]);
+        if (u < 0x20 || u >= 0x7f) throw InputError(where + "expected a word letter, got '" + printable(std::string(1, line[i])) + "'");
+        outside("the character '" + std::string(1, line[i]) + "'");
+      }
       ++i;
       while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
       if (i < line.size() && (line[i] == '#' || line[i] == '[')) outside("a #parameter or [expression] as a word's value");
       double value = 0;
       const std::size_t used = read_number(line, i, value);
       if (used == 0) throw InputError(where + "word '" + std::string(1, c) + "' has no number");
+      const std::string number = line.substr(i, used);
       i += used;
+      // A code or register: a whole number (G: one decimal) of a few digits, never cast out of range.
+      auto code = [&](double scale, double max) {
+        const double v = value * scale;
+        if (v < 0 || v > max || std::abs(v - std::round(v)) > 1e-6 * scale)
+          throw InputError(where + "word '" + std::string(1, c) + printable(number) + "' is not a code drom knows");
+        return static_cast<int>(std::lround(v));
+      };
+      if (c != 'G' && c != 'M' && c != 'H' && c != 'N' && c != 'T' && c != 'S' && std::abs(value) > kLargest)
+        throw InputError(where + "word " + std::string(1, c) + printable(number) + " is beyond any machine (|value| <= 1e6)");
       switch (c) {
-        case 'G': g_codes.push_back(static_cast<int>(std::lround(value * 10))); break;
-        case 'M': m_codes.push_back(static_cast<int>(std::lround(value))); break;
+        case 'G': g_codes.push_back(code(10, 9999)); break;
+        case 'M': m_codes.push_back(code(1, 999)); break;
         case 'N': case 'T': case 'S': break;
         case 'D': outside("a D word (cutter compensation)"); break;
         case 'U': case 'V': case 'W': outside(std::string("the ") + c + " axis"); break;
         case 'L': case 'E': outside(std::string("an ") + c + " word"); break;
-        case 'X': case 'Y': case 'Z': case 'A': case 'B': case 'C': case 'I': case 'J': case 'K': case 'R': case 'F': case 'P': case 'Q': case 'H':
+        case 'H': case 'X': case 'Y': case 'Z': case 'A': case 'B': case 'C': case 'I': case 'J': case 'K': case 'R': case 'F': case 'P': case 'Q':
           if (words.count(c)) throw InputError(where + "word " + std::string(1, c) + " appears twice");
-          words[c] = value;
+          words[c] = c == 'H' ? code(1, 99999) : value;
           break;
         default: outside("the word '" + std::string(1, c) + "'");
       }
@@ -224,7 +246,8 @@ NcProgram parse_plain_gcode(const std::string& text, const std::string& origin) 
         throw InputError(where + std::string(1, normal_word) + " is not an arc word of " + g_name(modal.plane * 10) + " (it uses " + first_word + " and " +
                          second_word + ")");
       const int turns = words.count('P') ? static_cast<int>(std::lround(words['P'])) : 1;
-      if (words.count('P') && (turns < 1 || std::abs(words['P'] - turns) > 1e-9)) throw InputError(where + "arc P (turns) must be a positive integer");
+      if (words.count('P') && !(words['P'] >= 1 && words['P'] <= kMostTurns && std::abs(words['P'] - std::round(words['P'])) <= 1e-9))
+        throw InputError(where + "arc P (turns) must be a whole number from 1 to " + std::to_string(kMostTurns));
       move.rotation = (modal.motion == 3 ? 1 : -1) * turns;
       const Eigen::Vector2d a(position[p.first], position[p.second]), b(target[p.first], target[p.second]);
       Eigen::Vector2d centre;

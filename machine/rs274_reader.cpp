@@ -130,7 +130,9 @@ bool parse_call(const std::string& line, Call& call) {
     const std::size_t start = i;
     while (i < line.size() && std::isdigit(static_cast<unsigned char>(line[i]))) ++i;
     if (i == start) return false;
-    call.n = std::stoll(line.substr(start, i - start));
+    // drom numbers the copy it hands rs274 from kLineBase; a number beyond that is no line of ours.
+    if (i - start > 12) call.n = -1;
+    else call.n = std::stoll(line.substr(start, i - start));
   }
   while (i < line.size() && line[i] == ' ') ++i;
   const std::size_t open = line.find('(', i), close = line.rfind(')');
@@ -144,6 +146,12 @@ std::vector<double> numbers(const std::string& args) {
   std::vector<double> v;
   const char* p = args.c_str();
   while (*p) {
+    // A number starts with a digit, a sign or a point: strtod alone would also read words ("inf",
+    // "nan", "infinity") as numbers.
+    if (!std::isdigit(static_cast<unsigned char>(*p)) && *p != '-' && *p != '+' && *p != '.') {
+      ++p;
+      continue;
+    }
     char* end = nullptr;
     const double x = std::strtod(p, &end);
     if (end == p) {
@@ -156,13 +164,13 @@ std::vector<double> numbers(const std::string& args) {
   return v;
 }
 
-int line_of(long long n) { return n >= kLineBase ? static_cast<int>(n - kLineBase) : 0; }
+int line_of(long long n) { return n >= kLineBase && n - kLineBase <= 100000000 ? static_cast<int>(n - kLineBase) : 0; }
 
 }  // namespace
 
 bool rs274_available(const Rs274Options& options) { return !find_executable(options).empty(); }
 
-NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& options) {
+Rs274Run run_rs274(const fs::path& program_path, const Rs274Options& options) {
   const std::string origin = program_path.string();
   std::ifstream in(program_path);
   if (!in) throw InputError(origin + ": cannot open program");
@@ -178,7 +186,10 @@ NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& opti
   {
     std::ofstream(copy) << numbered_copy(text.str());
     std::string paths = fs::absolute(program_path).parent_path().string();
-    for (const auto& p : options.subroutine_paths) paths += ":" + fs::absolute(p).string();
+    for (const auto& p : options.subroutine_paths) {
+      paths += ':';  // appended apart: GCC 12's -Wrestrict misreads ":" + std::string&& once inlined here
+      paths += fs::absolute(p).string();
+    }
     std::ofstream(ini) << "[RS274NGC]\nSUBROUTINE_PATH = " << paths << "\nPARAMETER_FILE = " << vars.string() << "\n";
     std::ofstream(vars) << "";
     std::ofstream tools(table);
@@ -198,8 +209,19 @@ NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& opti
   if (status == -1)
     throw InputError(origin + ": LinuxCNC's interpreter did not finish within " + std::to_string(options.timeout.count()) +
                      " s: an endless loop (O-word while/do/repeat)?");
+  std::ifstream in_calls(output, std::ios::binary);
+  std::ostringstream calls;
+  calls << in_calls.rdbuf();
+  return {calls.str(), status};
+}
 
-  std::ifstream canon(output);
+NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& options) {
+  const Rs274Run run = run_rs274(program_path, options);
+  return parse_rs274_calls(run.calls, run.status, program_path.string());
+}
+
+NcProgram parse_rs274_calls(std::string_view calls, int status, const std::string& origin) {
+  std::istringstream canon{std::string(calls)};
   NcProgram program;
   program.origin = origin;
   program.reader = "rs274";
@@ -259,6 +281,9 @@ NcProgram read_with_rs274(const fs::path& program_path, const Rs274Options& opti
     const int at = line_of(c.n);
     if (at > 0) last_line = at;
     const std::string& f = c.name;
+    if (f != "COMMENT" && f != "MESSAGE")
+      for (const double x : numbers(c.args))
+        if (!std::isfinite(x)) fail(at, "rs274 printed " + f + " with a value beyond any finite number: " + c.args.substr(0, 200));
     if (f == "STRAIGHT_TRAVERSE" || f == "STRAIGHT_FEED") {
       const auto v = numbers(c.args);
       if (v.size() < 6) fail(at, "rs274 printed " + f + " with " + std::to_string(v.size()) + " values");

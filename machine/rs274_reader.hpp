@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace drom::machine {
@@ -31,6 +32,20 @@ struct Rs274Options {
 bool rs274_available(const Rs274Options& options = {});
 
 // Throws InputError with the file, the line and the interpreter's message when it refuses the program.
+// The two steps below, composed.
 NcProgram read_with_rs274(const std::filesystem::path& program, const Rs274Options& options = {});
+
+// Step 1: the interpreter run on the program: its canonical calls (stdout and stderr) and its exit
+// status. Throws InputError when the program cannot be read, rs274 is missing or does not finish.
+struct Rs274Run {
+  std::string calls;
+  int status = 0;
+};
+Rs274Run run_rs274(const std::filesystem::path& program, const Rs274Options& options = {});
+
+// Step 2: the canonical calls read into moves, with `origin` (the program's name) in every message;
+// a non-zero status becomes the interpreter's complaint, named by the program line. Separate so that
+// drom's side of the exchange can be fuzzed without a process per input (fuzz/rs274_calls.cpp).
+NcProgram parse_rs274_calls(std::string_view calls, int status, const std::string& origin);
 
 }  // namespace drom::machine

@@ -69,6 +69,8 @@ class Checkpoint {
     } else if (join == Join::Existing) {
       throw InputError(dir_.string() + ": no job's stations are here (run the slices with --stations a:b and the same --out first)");
     } else {
+      // Station files without a manifest are not known to be this run's (a removal cut short): gone.
+      std::filesystem::remove_all(dir_);
       std::filesystem::create_directories(dir_);
       write_file_atomically(manifest, identity);
     }
@@ -124,7 +126,11 @@ class Checkpoint {
     }
     return "";
   }
-  void remove() const { std::filesystem::remove_all(dir_); }
+  // The manifest first: a removal cut short leaves no manifest over a partial set of stations.
+  void remove() const {
+    std::filesystem::remove(dir_ / "manifest.txt");
+    std::filesystem::remove_all(dir_);
+  }
 
  private:
   std::filesystem::path dir_;
@@ -314,7 +320,6 @@ nlohmann::json write_database(const Output& o, const PartModel& part, const std:
       if (frame_at(k, ns, o.frames)) pvd.add(stations[k].time, std::filesystem::path("frames") / (station_name(k) + ".vtu"));
     pvd.write(o.options.out / (o.mode + ".pvd"));
   }
-  o.checkpoint->remove();
 
   double max_w = 0;
   for (double v : B1) max_w = std::max(max_w, std::abs(v));
@@ -340,6 +345,7 @@ nlohmann::json write_database(const Output& o, const PartModel& part, const std:
                                              : nlohmann::json{"database.h5", "final_free_shape.vtu"}}};
   summary.update(pass);
   write_summary(o.options.out, summary);
+  o.checkpoint->remove();  // last: a job stopped before this resumes from its stations and writes all again
   return summary;
   if (!o.options.quiet)
     std::printf("drom %s: %s: %zu stations x %lld profile(s), %d unknowns, %.1f s (%.2f s per station on %d threads) -> %s/database.h5 (%.1f MB)\n",

@@ -280,6 +280,8 @@ ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void
     if (progress && k % std::max(1L, steps / 100) == 0) progress(static_cast<double>(k) / static_cast<double>(steps));
   }
   result.calibration = machine.calibration();
+  result.rejections = predictor.rejections();
+  result.offset_bound = predictor.max_offset();
   result.sync.finish();
   result.sync_programmed_feed.finish();
   result.estimate = predictor.estimate();

@@ -133,6 +133,8 @@ struct ClosedLoopResult {
   double learned_at = -1;          // program time (true) at which the predictor declared itself learned
   long long profiles = 0;
   ProfileReport points;            // totals over all profiles
+  Rejections rejections;           // what the predictor left out, by reason
+  double offset_bound = 0;         // mm: the bound the commanded offset was held within
   Estimate estimate;               // at the end
   CalibrationBias calibration;     // empty without calibration errors
   SyncError sync;                  // the synchronizer's, as run

@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -53,6 +54,7 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
   }
   normal_ = Eigen::MatrixXd::Zero(r_, r_);
   rhs_ = Eigen::VectorXd::Zero(r_);
+  kept_ = Share::zero(r_);
 
   // Path samples: every path_sample mm along the programmed path (and at every waypoint).
   std::vector<double> times;
@@ -92,7 +94,41 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
       sample_s0y_[j] += p->dy[static_cast<std::size_t>(q)] * z;
     }
   }
-  snapshot_.store(std::make_shared<const Snapshot>(Snapshot{prior_mean, prior_precision_.llt().solve(Eigen::MatrixXd::Identity(r_, r_)), false}));
+  const Eigen::MatrixXd prior_covariance = prior_precision_.llt().solve(Eigen::MatrixXd::Identity(r_, r_));
+  snapshot_.store(std::make_shared<const Snapshot>(Snapshot{prior_mean, prior_covariance, false}));
+  // The sane bound on the commanded offset: what the prior finds plausible anywhere on the path, its
+  // mean plus four standard deviations (a ball end mill's normal offset changes it by a fraction).
+  max_offset_ = settings_.max_offset;
+  if (!(max_offset_ > 0)) {
+    max_offset_ = 0;
+    for (Eigen::Index j = 0; j < m; ++j) {
+      if (sample_inside_[j] == 0) continue;
+      const Eigen::RowVectorXd g = offset_gradient(j, prior_mean);
+      max_offset_ = std::max(max_offset_, std::abs(g.dot(prior_mean)) + 4 * std::sqrt(std::max(0.0, g.dot(prior_covariance * g.transpose()))));
+    }
+  }
+}
+
+Predictor::Share& Predictor::Share::operator+=(const Share& o) {
+  normal += o.normal;
+  rhs += o.rhs;
+  points += o.points;
+  profiles += o.profiles;
+  return *this;
+}
+
+Predictor::Share Predictor::Share::zero(int r) {
+  Share s;
+  s.normal.setZero(r, r);
+  s.rhs.setZero(r);
+  return s;
+}
+
+Rejections Predictor::rejections() const {
+  std::lock_guard<std::mutex> lock(ingest_);
+  Rejections r = rejections_;
+  r.offsets_clamped = offsets_clamped_.load();
+  return r;
 }
 
 void Predictor::enter_face(InstantCache& cache, const reduce::SurfacePoint& p, const reduce::TimeInterval& now, FaceMemo& memo) {
@@ -181,17 +217,33 @@ void Predictor::set_offset(double t, double offset) { offsets_.set(t, offset); }
 
 void Predictor::record_offset(double t, double offset) {
   std::lock_guard<std::mutex> lock(ingest_);
-  if (!std::isfinite(t) || !std::isfinite(offset)) throw std::invalid_argument("record_offset: time and offset must be finite");
+  if (!std::isfinite(t) || !std::isfinite(offset)) {
+    ++rejections_.offsets_non_finite;
+    return;
+  }
+  // A late record is still a fact about the machine: the offset was in force from t on.
+  if (t < last_record_time_) ++rejections_.offsets_late;
+  last_record_time_ = std::max(last_record_time_, t);
   set_offset(t, offset);
 }
 
 ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<const MeasuredPoint> points) {
   ProfileReport report;
   std::lock_guard<std::mutex> lock(ingest_);
-  if (!std::isfinite(t) || !std::isfinite(pose.applied_offset)) throw std::invalid_argument("add_profile: the profile's time or offset is not finite");
-  if (profiles_ > 0 && t < last_profile_time_) throw std::invalid_argument("add_profile: profiles must come in time order");
+  auto reject = [&](long long& count, const char* why) {
+    ++count;
+    report.rejected = why;
+    return report;
+  };
+  if (!std::isfinite(t) || !std::isfinite(pose.applied_offset) || !pose.tip.allFinite()) return reject(rejections_.non_finite, "non-finite time, offset or tool position");
+  if (seen_profile_ && t < last_profile_time_) return reject(rejections_.out_of_order, "older than the last profile");
+  if (seen_profile_ && t == last_profile_time_) return reject(rejections_.repeated, "at the time of the last profile");
+  seen_profile_ = true;
   last_profile_time_ = t;
   set_offset(t, pose.applied_offset);
+  if (!points.empty() && points.size() == last_points_.size() && std::memcmp(points.data(), last_points_.data(), points.size_bytes()) == 0)
+    return reject(rejections_.stuck, "the very same points as the last profile (a frozen sensor)");
+  last_points_.assign(points.begin(), points.end());
   const auto snap = snapshot();
 
   // Per point, the differenced basis g = U1(x, t) - U1(x, t_cut(x)) at the point's own cut time; U1 is
@@ -313,12 +365,76 @@ ProfileReport Predictor::add_profile(double t, const ToolPose& pose, std::span<c
     square_error = first_square_error;  // the predictive residual is the fit's before this profile
   }
   report.used = static_cast<int>(used);
-  if (used > 0) {
-    const auto G = G_.topRows(used);
-    normal_.selfadjointView<Eigen::Lower>().rankUpdate(G.transpose(), w);
-    normal_.triangularView<Eigen::StrictlyUpper>() = normal_.transpose().eval();
-    rhs_.noalias() += w * (G.transpose() * m_.head(used));
+  if (used == 0) return reject(rejections_.empty, "no usable point");
+  const auto G = G_.topRows(used);
+  const auto readings = m_.head(used);
+  // Once learned, a profile off the fit as a whole is the sensor's fault, not the part's: its median
+  // residual (a shift of the whole profile) against the fit's predictive spread for the profile's mean
+  // row (plus the noise's share), with the model's own error and the learning tolerance as margins.
+  const bool judged = (learned_ || in_doubt_) && used >= 10;
+  double allowed = 0;
+  auto off_fit = [&](const Eigen::VectorXd& alpha) {
+    Eigen::VectorXd residual = readings - G * alpha;
+    const auto middle = residual.begin() + used / 2;
+    std::nth_element(residual.begin(), middle, residual.end());
+    return std::abs(*middle) > allowed;
+  };
+  bool off = false;
+  if (judged) {
+    const Eigen::VectorXd mean_row = G.colwise().mean().transpose();
+    const double spread = std::sqrt(std::max(0.0, mean_row.dot(snap->covariance * mean_row)) +
+                                    1.57 * settings_.noise_sd * settings_.noise_sd / static_cast<double>(used));  // var(median) = pi/2 sigma^2 / n
+    allowed = settings_.glitch_sigmas * spread + model_.error_bound() + settings_.learning_tolerance;
+    off = off_fit(snap->alpha);
   }
+  // This profile's share of the normal equations, kept apart while the fit is in doubt.
+  auto share = [&] {
+    Share s;
+    s.normal.setZero(r_, r_);
+    s.normal.selfadjointView<Eigen::Lower>().rankUpdate(G.transpose(), w);
+    s.normal.triangularView<Eigen::StrictlyUpper>() = s.normal.transpose().eval();
+    s.rhs.noalias() = w * (G.transpose() * readings);
+    s.points = used;
+    s.profiles = 1;
+    return s;
+  };
+  if (learned_ && off) {
+    if (++glitches_in_a_row_ >= settings_.glitch_run) {
+      // So many in a row: the sensor, or the fit? In doubt, no offset until the trusted fit predicts
+      // the stream again.
+      learned_ = false;
+      in_doubt_ = true;
+      glitches_in_a_row_ = agree_trusted_ = 0;
+      kept_ = Share::zero(r_);
+      ++rejections_.unlearned;
+      snapshot_.store(std::make_shared<const Snapshot>(Snapshot{snap->alpha, snap->covariance, false}), std::memory_order_release);
+    }
+    return reject(rejections_.glitch, "off the learned fit as a whole (a glitch)");
+  }
+  if (learned_) glitches_in_a_row_ = 0;
+  if (in_doubt_) {
+    // The trusted fit (as before the run) scores every profile: learning_window judged profiles in a
+    // row within the allowance end the doubt; the profiles it predicted join it, the others never do.
+    if (judged) agree_trusted_ = off ? 0 : agree_trusted_ + 1;
+    if (off) return reject(rejections_.glitch, "off the trusted fit while it is in doubt");
+    kept_ += share();
+    if (agree_trusted_ < settings_.learning_window) return report;
+    ++rejections_.doubts_resolved;
+    normal_ += kept_.normal;
+    rhs_ += kept_.rhs;
+    points_ += kept_.points;
+    profiles_ += kept_.profiles;
+    in_doubt_ = false;
+    learned_ = true;
+    kept_ = Share::zero(r_);
+    const Eigen::LLT<Eigen::MatrixXd> llt(normal_ + prior_precision_);
+    snapshot_.store(std::make_shared<const Snapshot>(Snapshot{llt.solve(rhs_ + prior_rhs_), llt.solve(Eigen::MatrixXd::Identity(r_, r_)), true}),
+                    std::memory_order_release);
+    return report;
+  }
+  normal_.selfadjointView<Eigen::Lower>().rankUpdate(G.transpose(), w);
+  normal_.triangularView<Eigen::StrictlyUpper>() = normal_.transpose().eval();
+  rhs_.noalias() += w * (G.transpose() * readings);
   points_ += report.used;
   ++profiles_;
   report.predictive_rms = report.used > 0 ? std::sqrt(square_error / report.used) : 0;
@@ -386,7 +502,7 @@ double Predictor::predicted_offset(double t) const {
   const auto snap = snapshot();
   if (!snap->learned || sample_time_.size() == 0) return 0;
   const auto [j, a] = reduce::locate_time(sample_time_, t);
-  if (sample_time_.size() == 1) return sample_inside_[0] ? sample_w_.row(0).dot(snap->alpha) : 0.0;
+  if (sample_time_.size() == 1) return sample_inside_[0] != 0 ? sample_w_.row(0).dot(snap->alpha) : 0.0;
   auto at = [&](Eigen::Index i) {
     if (sample_inside_[i] == 0) return 0.0;
     const double w = sample_w_.row(i).dot(snap->alpha);
@@ -416,7 +532,11 @@ double Predictor::predicted_offset_sd(double t) const {
 }
 
 double Predictor::tool_offset(double t) {
-  const double target = predicted_offset(t);
+  double target = predicted_offset(t);
+  if (std::abs(target) > max_offset_) {
+    target = std::clamp(target, -max_offset_, max_offset_);
+    offsets_clamped_.fetch_add(1, std::memory_order_relaxed);
+  }
   if (!offset_started_) {
     offset_started_ = true;
     last_offset_time_ = t;

@@ -20,6 +20,27 @@
 // Threads: one acquisition thread calls add_profile; one control thread calls tool_offset (which
 // keeps the rate limiter's state); any thread may call the const queries. The estimate is published
 // as an immutable snapshot, so a query never waits for a profile being ingested.
+//
+// A hostile stream (docs/robustness.md) is never an error: what is not a usable measurement is
+// counted by reason (rejections()) and left out, and the commanded offset always moves at most
+// max_offset_rate and stays within max_offset.
+//   Points: non-finite coordinates, off the part, not yet cut, or beyond reading_range of the fit's
+//   prediction (a wall, a chip) are dropped and counted in the profile's report.
+//   Profiles: a non-finite time or offset; older than, or at the time of, the last profile taken; the
+//   very same points as the last profile taken (a frozen sensor); none usable; and, once learned, a
+//   profile whose median residual is off the fit by more than glitch_sigmas of its predictive
+//   spread, plus the model's error bound and the learning tolerance (coolant on the sheet, a sensor
+//   that suddenly reads off): rejected and counted.
+//   Recovery: before learning no offset is commanded, and a burst that got into the fit only delays
+//   the learning (recent profiles must be predicted within the tolerance). After learning, a run of
+//   glitch_run glitches in a row puts the fit in doubt: the sensor may be off, or the part may have
+//   left the fit, and nothing in the readings alone tells which. In doubt, no offset is commanded (it
+//   returns to 0 at the rate limit, and the machine runs its program as written), and the trusted
+//   fit (as before the run) keeps scoring every profile by the same test: learning_window judged
+//   profiles in a row within the allowance end the doubt, the profiles it predicted join the fit,
+//   and the run leaves no trace. A sensor that stays off is never fitted and never corrected for; a
+//   part that truly left the fit is not followed either (it is reported: rejections().unlearned,
+//   summary.json's loop.rejected).
 #include "reduce/cut_time.hpp"
 #include "reduce/light_model.hpp"
 
@@ -27,6 +48,7 @@
 
 #include <array>
 #include <atomic>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <span>
@@ -53,9 +75,28 @@ struct PredictorSettings {
   double path_sample = 2.0;         // mm between the precomputed samples of the path's offsets
   bool use_stock_top = true;        // fit readings of the stock's top too (when the model has it)
   double top_noise_sd = -1;         // mm: sigma of those readings; <= 0: noise_sd
+  double max_offset = -1;           // mm: bound on the commanded offset; <= 0: the prior's mean + 4 sd of the offset along the path
+  double glitch_sigmas = 6;         // a learned fit rejects a profile whose median residual is off by this many predictive sd (plus margins)
+  int glitch_run = 20;              // this many glitch rejections in a row put the fit in doubt (the class comment)
+};
+
+// What a stream held that was not a usable measurement, counted by reason (the class comment).
+struct Rejections {
+  long long non_finite = 0;    // profiles with a non-finite time or applied offset
+  long long out_of_order = 0;  // profiles older than the last one taken
+  long long repeated = 0;      // profiles at the time of the last one taken
+  long long stuck = 0;         // profiles with the very same points as the last one taken
+  long long empty = 0;         // profiles with no usable point
+  long long glitch = 0;        // profiles as a whole off a learned fit
+  long long unlearned = 0;     // times a run of glitch_run glitches put the fit in doubt (no offset until resolved)
+  long long doubts_resolved = 0; // doubts resolved: the trusted fit predicted the stream again, the run left no trace
+  long long offsets_non_finite = 0;  // record_offset calls with a non-finite time or offset
+  long long offsets_late = 0;        // record_offset calls older than the last offset recorded (taken, in their place)
+  long long offsets_clamped = 0;     // tool_offset calls whose target passed max_offset
 };
 
 struct ProfileReport {
+  const char* rejected = nullptr;  // why the whole profile was left out (nullptr: taken); see Rejections
   int used = 0, outside = 0, not_yet_cut = 0, invalid = 0, out_of_range = 0;
   int used_top = 0;           // of `used`, readings of the stock's top (the rest are of the machined floor)
   double predictive_rms = 0;  // of the used points against the fit before they were added (mm)
@@ -119,6 +160,9 @@ class Predictor {
 
   FinalShape final_shape() const;
   Verdict verdict(const ShapeTolerances& tolerances) const;
+
+  Rejections rejections() const;
+  double max_offset() const { return max_offset_; }
 
   const reduce::LightModel& model() const { return model_; }
   const PredictorSettings& settings() const { return settings_; }
@@ -203,7 +247,25 @@ class Predictor {
   Eigen::VectorXd rhs_;     // sum g m / sigma^2
   long long points_ = 0;
   int profiles_ = 0;
-  double last_profile_time_ = 0;
+  double last_profile_time_ = 0, last_record_time_ = -std::numeric_limits<double>::infinity();
+  bool seen_profile_ = false;
+  std::vector<MeasuredPoint> last_points_;  // the last profile taken (a frozen sensor repeats it)
+  Rejections rejections_;                   // under ingest_, but for offsets_clamped (control thread)
+  std::atomic<long long> offsets_clamped_{0};
+  // Profiles' shares of the normal equations, held apart from the fit while it is in doubt: those the
+  // trusted fit predicts (kept_), which join it when the doubt ends.
+  struct Share {
+    Eigen::MatrixXd normal;
+    Eigen::VectorXd rhs;
+    long long points = 0;
+    int profiles = 0;
+    Share& operator+=(const Share& o);
+    static Share zero(int r);
+  };
+  Share kept_;
+  bool in_doubt_ = false;
+  int glitches_in_a_row_ = 0, agree_trusted_ = 0;
+  double max_offset_ = 0;
   std::vector<double> recent_square_error_, recent_count_;  // per recent profile
   reduce::OffsetHistory offsets_;                           // the applied offset over program time
   bool learned_ = false;

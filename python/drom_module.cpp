@@ -52,6 +52,7 @@ py::dict report_dict(const online::ProfileReport& r) {
   py::dict d;
   d["used"] = r.used, d["used_top"] = r.used_top, d["outside"] = r.outside, d["not_yet_cut"] = r.not_yet_cut;
   d["invalid"] = r.invalid, d["out_of_range"] = r.out_of_range, d["predictive_rms"] = r.predictive_rms;
+  d["rejected"] = r.rejected ? py::object(py::str(r.rejected)) : py::object(py::none());
   return d;
 }
 
@@ -185,7 +186,10 @@ PYBIND11_MODULE(drom, m) {
       .def_readwrite("max_offset_rate", &online::PredictorSettings::max_offset_rate)
       .def_readwrite("path_sample", &online::PredictorSettings::path_sample)
       .def_readwrite("use_stock_top", &online::PredictorSettings::use_stock_top)
-      .def_readwrite("top_noise_sd", &online::PredictorSettings::top_noise_sd);
+      .def_readwrite("top_noise_sd", &online::PredictorSettings::top_noise_sd)
+      .def_readwrite("max_offset", &online::PredictorSettings::max_offset)
+      .def_readwrite("glitch_sigmas", &online::PredictorSettings::glitch_sigmas)
+      .def_readwrite("glitch_run", &online::PredictorSettings::glitch_run);
   py::class_<online::Predictor>(m, "Predictor", "The online predictor (online/predictor.hpp): one thread feeds profiles, one asks for offsets")
       .def(py::init([](const std::shared_ptr<reduce::LightModel>& model, const online::PredictorSettings& s) { return std::make_unique<online::Predictor>(*model, s); }),
            py::arg("model"), py::arg("settings") = online::PredictorSettings{})
@@ -200,6 +204,18 @@ PYBIND11_MODULE(drom, m) {
           "One laser profile read at program time t, the tool tip and offset then, points an (N, 3) float64 array (NaN z: no reading); returns the "
           "counts of points used and dropped")
       .def("record_offset", &online::Predictor::record_offset, py::arg("t"), py::arg("offset"))
+      .def(
+          "rejections",
+          [](const online::Predictor& p) {
+            const online::Rejections r = p.rejections();
+            py::dict d;
+            d["non_finite"] = r.non_finite, d["out_of_order"] = r.out_of_order, d["repeated"] = r.repeated, d["stuck"] = r.stuck, d["empty"] = r.empty;
+            d["glitch"] = r.glitch, d["unlearned"] = r.unlearned, d["doubts_resolved"] = r.doubts_resolved, d["offsets_non_finite"] = r.offsets_non_finite, d["offsets_late"] = r.offsets_late;
+            d["offsets_clamped"] = r.offsets_clamped;
+            return d;
+          },
+          "what the stream held that was not a usable measurement, counted by reason (docs/robustness.md)")
+      .def_property_readonly("max_offset", &online::Predictor::max_offset, "mm: the bound on the commanded offset")
       .def("tool_offset", &online::Predictor::tool_offset, py::arg("t"), "the rate-limited offset for program time t (the control thread's)")
       .def("predicted_offset", &online::Predictor::predicted_offset, py::arg("t"))
       .def("predicted_offset_sd", &online::Predictor::predicted_offset_sd, py::arg("t"))
@@ -234,6 +250,7 @@ PYBIND11_MODULE(drom, m) {
       .def_readonly("invalid", &online::ProfileReport::invalid)
       .def_readonly("out_of_range", &online::ProfileReport::out_of_range)
       .def_readonly("predictive_rms", &online::ProfileReport::predictive_rms)
+      .def_property_readonly("rejected", [](const online::ProfileReport& r) { return r.rejected ? py::object(py::str(r.rejected)) : py::object(py::none()); })
       .def("as_dict", &report_dict);
 
   // ---- the closed loop ----------------------------------------------------------------------

@@ -57,8 +57,13 @@ CutTimeIndex::CutTimeIndex(const Eigen::MatrixXd& path, double radius, double z_
       x0_ = std::min(x0_, path(j, 0) - radius), y0_ = std::min(y0_, path(j, 1) - radius);
       x1 = std::max(x1, path(j, 0) + radius), y1 = std::max(y1, path(j, 1) + radius);
     }
-  nx_ = std::max(1, static_cast<int>(std::ceil((x1 - x0_) / cell_)));
-  ny_ = std::max(1, static_cast<int>(std::ceil((y1 - y0_) / cell_)));
+  // At most 2048 x 2048 buckets: a path far larger than the tool (or a tiny radius) widens the cells
+  // instead of asking for a grid past any memory, or past an int (the model_fields fuzzer, finding 19).
+  // The buckets only index the segments: the distance tests below decide, whatever the cell size.
+  constexpr double kMostCells = 2048;
+  cell_ = std::max({cell_, (x1 - x0_) / kMostCells, (y1 - y0_) / kMostCells});
+  nx_ = std::max(1, static_cast<int>(std::min(kMostCells, std::ceil((x1 - x0_) / cell_))));
+  ny_ = std::max(1, static_cast<int>(std::min(kMostCells, std::ceil((y1 - y0_) / cell_))));
   buckets_.resize(static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_));
   for (Eigen::Index i : low) {
     // Buckets within `radius` of the segment (its bounding box grown by the radius, then a distance test).
@@ -78,9 +83,19 @@ CutTimeIndex::CutTimeIndex(const Eigen::MatrixXd& path, double radius, double z_
   }
 }
 
+// The bucket holding `point`, or false when it lies outside the grid (compared as doubles first: a
+// far point's index would not fit an int).
+bool CutTimeIndex::bucket_of(const Eigen::Vector3d& point, int& i, int& j) const {
+  if (buckets_.empty()) return false;
+  const double fi = std::floor((point.x() - x0_) / cell_), fj = std::floor((point.y() - y0_) / cell_);
+  if (!(fi >= 0 && fj >= 0 && fi < nx_ && fj < ny_)) return false;
+  i = static_cast<int>(fi), j = static_cast<int>(fj);
+  return true;
+}
+
 double CutTimeIndex::at(const Eigen::Vector3d& point) const {
-  const int i = static_cast<int>(std::floor((point.x() - x0_) / cell_)), j = static_cast<int>(std::floor((point.y() - y0_) / cell_));
-  if (buckets_.empty() || i < 0 || j < 0 || i >= nx_ || j >= ny_) return std::numeric_limits<double>::infinity();
+  int i = 0, j = 0;
+  if (!bucket_of(point, i, j)) return std::numeric_limits<double>::infinity();
   double best = std::numeric_limits<double>::infinity();
   for (int s : buckets_[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)]) {
     const double t = segment_cover_time(path_, s, point, radius_, z_tolerance_);
@@ -91,8 +106,8 @@ double CutTimeIndex::at(const Eigen::Vector3d& point) const {
 
 void CutTimeIndex::covers(const Eigen::Vector3d& point, double until, std::vector<std::pair<double, double>>& out) const {
   out.clear();
-  const int i = static_cast<int>(std::floor((point.x() - x0_) / cell_)), j = static_cast<int>(std::floor((point.y() - y0_) / cell_));
-  if (buckets_.empty() || i < 0 || j < 0 || i >= nx_ || j >= ny_) return;
+  int i = 0, j = 0;
+  if (!bucket_of(point, i, j)) return;
   const double z_top = point.z() + z_tolerance_, r2 = radius_ * radius_;
   for (int s : buckets_[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)]) {
     // The stretch of the segment during which the tool covers the point with its tip down: within

@@ -164,6 +164,7 @@ class CutTimeIndex {
   };
   std::vector<Segment> segments_;
   double radius_ = 0, z_tolerance_ = 0;
+  bool bucket_of(const Eigen::Vector3d& point, int& i, int& j) const;
   double x0_ = 0, y0_ = 0, cell_ = 1;
   int nx_ = 0, ny_ = 0;
   std::vector<std::vector<int>> buckets_;  // segment indices (sorted, so the first hit in time order wins ties)

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 
 namespace drom::reduce {
 
@@ -35,7 +36,11 @@ SurfaceMesh surface(const Eigen::MatrixXd& xyz, const std::vector<int>& nodes, c
   Eigen::Matrix3Xd points(3, static_cast<Eigen::Index>(nodes.size()));
   for (std::size_t i = 0; i < nodes.size(); ++i) points.col(static_cast<Eigen::Index>(i)) = xyz.row(nodes[i]).transpose();
   if (faces.rows() == 0) throw InputError(file.string() + ": no face on the " + what);
-  return SurfaceMesh(points, as_indices(faces, static_cast<Eigen::Index>(nodes.size()), file, what + " faces"), static_cast<int>(faces.cols()));
+  try {
+    return SurfaceMesh(points, as_indices(faces, static_cast<Eigen::Index>(nodes.size()), file, what + " faces"), static_cast<int>(faces.cols()));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(file.string() + ": the " + what + ": " + e.what());  // finding 23: faces of 1 node
+  }
 }
 
 }  // namespace
@@ -48,14 +53,34 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   DatabaseReduction out;
   out.database = db_path;
   out.case_name = h5.text_attribute("case_name");
+  // Displacements per unit profile (mm) and times (s) from a real job are far inside these bounds;
+  // finite values near 1e300 would overflow the POD's products into infinities (finding 17).
+  const auto bounded = [&](const Eigen::MatrixXd& m, const std::string& name, double most = 1e7,
+                           const std::string& what = "any displacement (mm) or time (s) of a job (|value| <= 1e7)") {
+    if (m.size() == 0 || m.cwiseAbs().maxCoeff() <= most) return;
+    std::ostringstream largest;
+    largest << m.cwiseAbs().maxCoeff();
+    throw InputError(db_path.string() + ": dataset '" + name + "' holds a value of magnitude " + largest.str() + ", beyond " + what);
+  };
   SnapshotDatabase db;
-  db.B1 = read_matrix(h5, "B1");
-  db.station_times = read_matrix(h5, "station_time");
-  const Eigen::MatrixXd B2 = read_matrix(h5, "B2"), xyz = read_matrix(h5, "node_coordinates");
-  const Eigen::MatrixXd pocket = read_matrix(h5, "pocket");
+  db.B1 = read_finite_matrix(h5, "B1");
+  bounded(db.B1, "B1");
+  const Eigen::MatrixXd station_time = read_finite_matrix(h5, "station_time");
+  if (station_time.cols() != 1) throw InputError(db_path.string() + ": dataset 'station_time': one column (a time per station) expected");
+  bounded(station_time, "station_time");
+  db.station_times = station_time.col(0);
+  // Stations come in program order: two out of order (or at one instant) made the histories'
+  // interpolation divide by a zero or negative step, an infinite error bound accepted (finding 18).
+  for (Eigen::Index s = 1; s < db.station_times.size(); ++s)
+    if (!(db.station_times(s) > db.station_times(s - 1)))
+      throw InputError(db_path.string() + ": dataset 'station_time': station " + std::to_string(s) + " at " + std::to_string(db.station_times(s)) +
+                       " s does not follow station " + std::to_string(s - 1) + " at " + std::to_string(db.station_times(s - 1)) + " s: increasing program times expected");
+  const Eigen::MatrixXd B2 = read_finite_matrix(h5, "B2"), xyz = read_finite_matrix(h5, "node_coordinates");
+  bounded(B2, "B2"), bounded(xyz, "node_coordinates");
+  const Eigen::MatrixXd pocket = read_finite_matrix(h5, "pocket");
   if (xyz.cols() != 3) throw InputError(db_path.string() + ": node_coordinates: 3 columns expected");
   if (pocket.size() != 5) throw InputError(db_path.string() + ": pocket: x_min, y_min, length_x, length_y, depth expected");
-  const std::vector<int> target = as_indices(read_matrix(h5, "target_nodes"), xyz.rows(), db_path, "target_nodes");
+  const std::vector<int> target = as_indices(read_finite_matrix(h5, "target_nodes"), xyz.rows(), db_path, "target_nodes");
   const auto nt = target.size();
   if (nt == 0 || db.B1.rows() != static_cast<Eigen::Index>(nt) * db.station_times.size())
     throw InputError(db_path.string() + ": B1 has " + std::to_string(db.B1.rows()) + " rows, expected stations x target nodes");
@@ -67,9 +92,9 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
 
   // 1. Surfaces: the target, and the final part's (its B2 rows are the final shape).
   LightModel& model = out.model;
-  model.target = surface(xyz, target, read_matrix(h5, "target_faces"), db_path, "target surface");
-  const std::vector<int> shape = as_indices(read_matrix(h5, "shape_nodes"), xyz.rows(), db_path, "shape_nodes");
-  const SurfaceMesh shape_surface = surface(xyz, shape, read_matrix(h5, "shape_faces"), db_path, "final part");
+  model.target = surface(xyz, target, read_finite_matrix(h5, "target_faces"), db_path, "target surface");
+  const std::vector<int> shape = as_indices(read_finite_matrix(h5, "shape_nodes"), xyz.rows(), db_path, "shape_nodes");
+  const SurfaceMesh shape_surface = surface(xyz, shape, read_finite_matrix(h5, "shape_faces"), db_path, "final part");
   model.shape_nodes = shape_surface.nodes();
   model.shape_faces = shape_surface.faces();
   model.shape_face_nodes = shape_surface.nodes_per_face();
@@ -81,8 +106,9 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   std::vector<int> top;
   if (options.top_margin >= 0) {
     if (!h5.has("B1_top")) throw InputError(db_path.string() + ": no B1_top; run drom offline again for --top-margin");
-    const Eigen::MatrixXd B1_top = read_matrix(h5, "B1_top"), uvt = read_matrix(h5, "top_parametric");
-    const std::vector<int> top_ids = as_indices(read_matrix(h5, "top_nodes"), xyz.rows(), db_path, "top_nodes");
+    const Eigen::MatrixXd B1_top = read_finite_matrix(h5, "B1_top"), uvt = read_finite_matrix(h5, "top_parametric");
+    bounded(B1_top, "B1_top"), bounded(uvt, "top_parametric");
+    const std::vector<int> top_ids = as_indices(read_finite_matrix(h5, "top_nodes"), xyz.rows(), db_path, "top_nodes");
     const auto ntop = static_cast<Eigen::Index>(top_ids.size());
     const Eigen::Index ns = db.station_times.size();
     if (ntop == 0 || B1_top.rows() != ntop * ns || B1_top.cols() != db.B1.cols() || uvt.rows() != ntop)
@@ -100,7 +126,7 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
     for (Eigen::Index j = 0; j < kept; ++j)
       for (Eigen::Index s = 0; s < ns; ++s) db.B1_top.row(s * kept + j) = B1_top.row(s * ntop + rows[static_cast<std::size_t>(j)]);
     // The top's faces: those of the stock's top face whose nodes all lie within the margin.
-    const Eigen::MatrixXd top_faces = read_matrix(h5, "top_faces");
+    const Eigen::MatrixXd top_faces = read_finite_matrix(h5, "top_faces");
     std::vector<int> local(static_cast<std::size_t>(ntop), -1);
     for (Eigen::Index j = 0; j < kept; ++j) local[static_cast<std::size_t>(rows[static_cast<std::size_t>(j)])] = static_cast<int>(j);
     std::vector<Eigen::Index> keep_faces;
@@ -119,8 +145,9 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   out.top_nodes = top.size();
 
   // 3. Path, tool, and when each target node was cut.
-  const Eigen::MatrixXd cutting = read_matrix(h5, "path_cutting");
-  model.path = read_matrix(h5, "path_waypoints");
+  const Eigen::MatrixXd cutting = read_finite_matrix(h5, "path_cutting");
+  model.path = read_finite_matrix(h5, "path_waypoints");
+  bounded(model.path, "path_waypoints");
   if (model.path.cols() != 4 || cutting.rows() != model.path.rows() || model.path.rows() < 2 || !model.path.allFinite())
     throw InputError(db_path.string() + ": path_waypoints / path_cutting: rows of x, y, z, t and one flag per row expected");
   std::vector<char> cut(static_cast<std::size_t>(cutting.rows()));
@@ -149,7 +176,10 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   settings.tolerance = options.tolerance;
   settings.history_tolerance = options.history_tolerance >= 0 ? options.history_tolerance : 0.5 * options.tolerance;
   // The case's coefficients in the database's column order, when they are its columns' profile.
-  const Eigen::VectorXd case_coefficients = h5.has("case_coefficients") ? Eigen::VectorXd(read_matrix(h5, "case_coefficients").reshaped()) : Eigen::VectorXd();
+  const Eigen::VectorXd case_coefficients = h5.has("case_coefficients") ? Eigen::VectorXd(read_finite_matrix(h5, "case_coefficients").reshaped()) : Eigen::VectorXd();
+  // The case's profile coefficients are stresses: -1.8e308 MPa made the prior's scale infinite and
+  // the model's error bound with it (finding 18).
+  bounded(case_coefficients, "case_coefficients", 1e4, "any residual stress (MPa) (|value| <= 1e4)");
   const bool case_columns = case_coefficients.size() > 0 && case_coefficients.size() == db.B1.cols();
   const double largest = case_coefficients.size() > 0 ? case_coefficients.cwiseAbs().maxCoeff() : 0.0;
   settings.profile_scale = options.profile_scale > 0 ? options.profile_scale : (largest > 0 ? largest : 50.0);
@@ -160,7 +190,13 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   // The prior's mean: the case's own profile, the one the stock is expected to carry (a quenched
   // plate's skins are in compression, not as likely in tension: a zero mean would say they are).
   if (options.prior_mean_from_case && case_columns) settings.profile_mean = case_coefficients;
-  out.report = reduce_snapshots(db, settings, model);
+  try {
+    out.report = reduce_snapshots(db, settings, model);
+  } catch (const std::invalid_argument& e) {
+    // What the reduction refuses comes from the file's numbers: name the file (defence in depth
+    // behind the bounds above).
+    throw InputError(db_path.string() + ": its snapshots cannot be reduced: " + e.what());
+  }
   model.case_toml = h5.text_attribute("case");
   model.database_hash = h5.text_attribute("content_hash");
   return out;

@@ -97,6 +97,9 @@ void DeviationFamily::add_measured(const std::filesystem::path& csv, double nomi
       throw InputError(csv.string() + ":" + std::to_string(n) + ": expected three numbers x,y,z");
     }
     if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) throw InputError(csv.string() + ":" + std::to_string(n) + ": x, y and z must be finite");
+    // A kilometre: beyond any blank (squared distances of such points would overflow).
+    if (std::abs(x) > 1e6 || std::abs(y) > 1e6 || std::abs(z - nominal_z) > 1e6)
+      throw InputError(csv.string() + ":" + std::to_string(n) + ": x, y and z must lie within 1e6 mm");
     pts.emplace_back(x, y, z - nominal_z);
   }
   if (pts.size() < 4) throw InputError(csv.string() + ": a measured surface needs at least 4 points, found " + std::to_string(pts.size()));

@@ -1,10 +1,14 @@
 #include "reduce/light_model.hpp"
 
 #include "support/file_format.hpp"
+#include "support/hdf5_eigen.hpp"
 #include "support/hdf5_reader.hpp"
 #include "support/hdf5_writer.hpp"
 #include "support/input_error.hpp"
 
+#include <Eigen/Cholesky>
+
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -32,14 +36,43 @@ void put_single(Hdf5Writer& h5, const std::string& name, const Eigen::MatrixXd& 
 
 std::vector<double> as_doubles(const std::vector<int>& v) { return {v.begin(), v.end()}; }
 
-Eigen::MatrixXd get(const Hdf5Reader& h5, const std::string& name) {
-  const Hdf5Matrix m = h5.matrix(name);
-  return Eigen::Map<const RowMajor>(m.data.data(), static_cast<Eigen::Index>(m.rows), static_cast<Eigen::Index>(m.cols));
+Eigen::MatrixXd get(const Hdf5Reader& h5, const std::string& name) { return read_finite_matrix(h5, name); }
+
+// Points stored one per row (x, y, z), as a 3 x n matrix. The shape is checked first: Eigen does not
+// check a fixed-size assignment in release builds, and 4 columns overran the 3-row buffer (a
+// heap-buffer-overflow the model_fields fuzzer found, finding 16 in docs/robustness.md).
+Eigen::Matrix3Xd get_points(const Hdf5Reader& h5, const std::string& name) {
+  const Eigen::MatrixXd m = get(h5, name);
+  if (m.cols() != 3)
+    throw InputError(h5.path().string() + ": dataset '" + name + "' has " + std::to_string(m.cols()) + " columns, expected 3 (x, y, z per row)");
+  if (m.size() > 0 && m.cwiseAbs().maxCoeff() > 1e6) throw InputError(h5.path().string() + ": dataset '" + name + "': positions within 1e6 mm expected");
+  return m.transpose();
+}
+
+// Indices and counts are stored as numbers: each must be whole and within [min, max] before it is an int.
+int whole(const Hdf5Reader& h5, const std::string& name, double v, int min, int max) {
+  if (!(v >= min && v <= max && v == std::floor(v)))
+    throw InputError(h5.path().string() + ": " + name + " is " + std::to_string(v) + ", expected a whole number in [" + std::to_string(min) + ", " +
+                     std::to_string(max) + "]");
+  return static_cast<int>(v);
+}
+
+int count(const Hdf5Reader& h5, const std::string& attribute, int min, int max) { return whole(h5, attribute, h5.number_attribute(attribute), min, max); }
+
+// A length or a bound: finite, and > 0 (or >= 0 when `zero_too`).
+double measure(const Hdf5Reader& h5, const std::string& attribute, bool zero_too = true) {
+  const double v = h5.number_attribute(attribute);
+  if (!std::isfinite(v) || v < 0 || (!zero_too && v == 0))
+    throw InputError(h5.path().string() + ": " + attribute + " is " + std::to_string(v) + ", expected a finite number " + (zero_too ? ">= 0" : "> 0"));
+  return v;
 }
 
 std::vector<int> indices(const Hdf5Reader& h5, const std::string& name) {
   const Hdf5Matrix a = h5.matrix(name);
-  return {a.data.begin(), a.data.end()};
+  std::vector<int> out;
+  out.reserve(a.data.size());
+  for (double v : a.data) out.push_back(whole(h5, "an index in " + name, v, 0, std::numeric_limits<int>::max()));
+  return out;
 }
 
 // A surface the model carries over time (the target, the stock's top): `<name>_nodes`, `<name>_faces`
@@ -63,7 +96,7 @@ template <class Fail>
 void get_surface(const Hdf5Reader& h5, const std::string& name, const std::string& histories, int rank, const Eigen::VectorXd& times, const Fail& fail,
                  SurfaceMesh& mesh, Eigen::VectorXd& cut_time, std::vector<SpaceTimeField>& modes) {
   try {
-    mesh = SurfaceMesh(get(h5, name + "_nodes").transpose(), indices(h5, name + "_faces"), static_cast<int>(h5.number_attribute(name + "_face_nodes")));
+    mesh = SurfaceMesh(get_points(h5, name + "_nodes"), indices(h5, name + "_faces"), count(h5, name + "_face_nodes", 1, 27));
   } catch (const std::invalid_argument& e) {
     throw fail(name + " surface: " + e.what());
   }
@@ -132,17 +165,17 @@ LightModel LightModel::read(const std::filesystem::path& file) {
   LightModel m;
   m.case_toml = h5.text_attribute("case");
   m.database_hash = h5.text_attribute("database_hash");
-  const int r = static_cast<int>(h5.number_attribute("rank"));
-  m.profile_scale = h5.number_attribute("profile_scale_mpa");
-  m.tolerance = h5.number_attribute("tolerance_mm");
-  m.history_tolerance = h5.number_attribute("history_tolerance_mm");
-  m.pod_max_bound = h5.number_attribute("pod_max_bound_mm");
-  m.pod_euclidean_bound = h5.number_attribute("pod_euclidean_bound_mm");
-  m.history_bound = h5.number_attribute("history_bound_mm");
+  const int r = count(h5, "rank", 0, 100000);
+  m.profile_scale = measure(h5, "profile_scale_mpa", false);
+  m.tolerance = measure(h5, "tolerance_mm");
+  m.history_tolerance = measure(h5, "history_tolerance_mm");
+  m.pod_max_bound = measure(h5, "pod_max_bound_mm");
+  m.pod_euclidean_bound = measure(h5, "pod_euclidean_bound_mm");
+  m.history_bound = measure(h5, "history_bound_mm");
   m.tool_shape = h5.text_attribute("tool_shape") == "ball" ? ToolShape::Ball : ToolShape::Flat;
-  m.tool_radius = h5.number_attribute("tool_radius_mm");
-  m.pocket_depth = h5.number_attribute("pocket_depth_mm");
-  m.shape_face_nodes = static_cast<int>(h5.number_attribute("shape_face_nodes"));
+  m.tool_radius = measure(h5, "tool_radius_mm", false);
+  m.pocket_depth = measure(h5, "pocket_depth_mm", false);
+  m.shape_face_nodes = count(h5, "shape_face_nodes", 1, 27);
   m.singular_values = get(h5, "singular_values");
   m.right = get(h5, "right");
   m.prior_sd = get(h5, "prior_sd");
@@ -150,6 +183,11 @@ LightModel LightModel::read(const std::filesystem::path& file) {
     m.prior_covariance = get(h5, "prior_covariance");
     if (m.prior_covariance.rows() != r || m.prior_covariance.cols() != r || !m.prior_covariance.allFinite())
       throw fail("prior_covariance: a finite rank x rank matrix expected");
+    // A covariance: symmetric and positive definite, or the predictor cannot invert it (finding 20).
+    const double scale = std::max(1e-300, m.prior_covariance.cwiseAbs().maxCoeff());
+    if (r > 0 && ((m.prior_covariance - m.prior_covariance.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale ||
+                  Eigen::LLT<Eigen::MatrixXd>(m.prior_covariance).info() != Eigen::Success))
+      throw fail("prior_covariance: a symmetric positive definite matrix expected");
   }
   if (h5.has("prior_mean")) {
     m.prior_mean = get(h5, "prior_mean");
@@ -159,17 +197,23 @@ LightModel LightModel::read(const std::filesystem::path& file) {
   const Eigen::VectorXd times = r > 0 ? Eigen::VectorXd(get(h5, "history_times")) : Eigen::VectorXd();
   get_surface(h5, "target", "history", r, times, fail, m.target, m.target_cut_time, m.histories);
   if (h5.has("top_nodes")) {
-    m.top_history_bound = h5.number_attribute("top_history_bound_mm");
-    m.top_error_bound = h5.number_attribute("top_error_bound_mm");
+    m.top_history_bound = measure(h5, "top_history_bound_mm");
+    m.top_error_bound = measure(h5, "top_error_bound_mm");
     get_surface(h5, "top", "top_history", r, times, fail, m.top, m.top_cut_time, m.top_histories);
   }
-  m.shape_nodes = get(h5, "shape_nodes").transpose();
+  m.shape_nodes = get_points(h5, "shape_nodes");
   m.shape_faces = indices(h5, "shape_faces");
   m.final_basis = get(h5, "final_basis");
   if (m.final_basis.rows() != 3 * m.shape_nodes.cols() || m.final_basis.cols() != r) throw fail("final_basis: (3 x shape nodes) x rank expected");
   m.path = get(h5, "path");
   if (m.path.cols() != 4) throw fail("path: 4 columns (x, y, z, program time) expected");
+  // A machine's travel and a program's length: 1e6 mm and 1e7 s bound any real one, and keep the
+  // cut-time index's arithmetic finite (finding 19).
+  if (m.path.size() > 0 && (m.path.leftCols(3).cwiseAbs().maxCoeff() > 1e6 || m.path.col(3).cwiseAbs().maxCoeff() > 1e7))
+    throw fail("path: positions within 1e6 mm and program times within 1e7 s expected");
+  if (m.tool_radius > 1e3) throw fail("tool_radius_mm: a tool radius up to 1000 mm expected");
   if (!m.final_basis.allFinite() || !m.prior_sd.allFinite()) throw fail("final_basis or prior_sd holds NaN or infinite values");
+  if (r > 0 && !(m.prior_sd.array() > 0).all()) throw fail("prior_sd: standard deviations > 0 expected");
   return m;
 }
 

@@ -69,6 +69,9 @@ ReductionReport reduce_snapshots(const SnapshotDatabase& db, const ReductionSett
   const Eigen::MatrixXd A = settings.profile_scale * db.B1;
   const Pod pod = truncated_pod(A, settings.tolerance, PodNorm::Max, settings.max_rank);
   const int r = pod.rank();
+  // All-zero snapshots (a database scaled by 0) keep no mode: a model that predicts nothing is no
+  // model, and the empty blocks below would be arithmetic on a null pointer (finding 21).
+  if (r == 0) throw std::invalid_argument("the snapshots hold no displacement above the tolerance: no mode to keep");
   model.singular_values = pod.singular_values;
   model.right = pod.right;
   model.profile_scale = settings.profile_scale;

@@ -185,8 +185,10 @@ std::optional<SurfacePoint> SurfaceMesh::locate(double x, double y, int hint, bo
   if (buckets_.empty() || !std::isfinite(x) || !std::isfinite(y)) return std::nullopt;
   SurfacePoint p;
   if (hint >= 0 && hint < face_count() && inside_face(hint, x, y, p, slopes)) return p;
-  const int i = static_cast<int>(std::floor((x - x0_) / cell_)), j = static_cast<int>(std::floor((y - y0_) / cell_));
-  if (i < 0 || j < 0 || i >= nx_ || j >= ny_) return std::nullopt;
+  // Compared as doubles first: a point far off the mesh has a cell index past an int (finding 22).
+  const double fi = std::floor((x - x0_) / cell_), fj = std::floor((y - y0_) / cell_);
+  if (!(fi >= 0 && fj >= 0 && fi < nx_ && fj < ny_)) return std::nullopt;
+  const int i = static_cast<int>(fi), j = static_cast<int>(fj);
   for (int f : buckets_[static_cast<std::size_t>(j * nx_ + i)])
     if (inside_face(f, x, y, p, slopes)) return p;
   return std::nullopt;

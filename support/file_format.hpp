@@ -15,8 +15,8 @@ struct FileFormat {
 };
 
 // The files drom's stages hand each other.
-inline const FileFormat kSnapshotDatabase{"drom snapshot database", 2};  // offline/ writes it, reduce/ reads it
-inline const FileFormat kLightModel{"drom light model", 2};              // reduce/ writes it, online/ reads it
+inline const FileFormat kSnapshotDatabase{"drom snapshot database", 3};  // offline/ writes it, reduce/ reads it
+inline const FileFormat kLightModel{"drom light model", 3};              // reduce/ writes it, online/ reads it
 
 void write_file_format(Hdf5Writer& file, const FileFormat& format);
 // Throws InputError naming the file unless it is `format` at its version.

@@ -1,5 +1,6 @@
 #include "support/hdf5_reader.hpp"
 
+#include "support/file_integrity.hpp"
 #include "support/input_error.hpp"
 
 #include <hdf5.h>
@@ -8,7 +9,10 @@ namespace drom {
 
 Hdf5Reader::Hdf5Reader(const std::filesystem::path& path) : path_(path) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported by us, with context
-  handle_ = std::filesystem::exists(path) ? H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT) : -1;
+  // No byte reaches libhdf5 unless it is what drom wrote: libhdf5 is not hardened against damaged
+  // files (docs/robustness.md).
+  check_seal(path);
+  handle_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   if (handle_ < 0) throw InputError(path.string() + ": not a readable HDF5 file");
 }
 

@@ -1,15 +1,30 @@
 #include "support/hdf5_writer.hpp"
 
+#include "support/file_integrity.hpp"
+
 #include <hdf5.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <stdexcept>
 
 namespace drom {
 
 namespace {
+
+// Before main, before any HDF5 call: no library shutdown at exit, and no error stack on stderr (drom
+// says what failed). A file whose close failed (a full disk) stays in libhdf5's tables, and its
+// shutdown then closes it again and crashes (libhdf5 1.10.8: SIGSEGV in H5F__close_cb). drom closes
+// every file it opens, so the shutdown has nothing else to do.
+[[maybe_unused]] const bool hdf5_quiet_and_no_atexit = [] {
+  H5dont_atexit();
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  return true;
+}();
+// errno says why a write failed (a full disk: ENOSPC); HDF5's own stack is switched off (hdf5_reader.cpp).
 void check(herr_t status, const std::string& what) {
-  if (status < 0) throw std::runtime_error("HDF5: " + what);
+  if (status < 0) throw std::runtime_error("HDF5: cannot " + what + (errno != 0 ? std::string(": ") + std::strerror(errno) : std::string()));
 }
 
 void write_dataset(hid_t file, const std::string& name, const void* data, hid_t type, std::size_t rows, std::size_t cols) {
@@ -28,18 +43,26 @@ void write_dataset(hid_t file, const std::string& name, const void* data, hid_t 
     check(H5Pset_chunk(props, rank, rank == 2 ? chunk : chunk1), "chunk " + name);
     check(H5Pset_deflate(props, 4), "deflate " + name);
   }
+  errno = 0;
   const hid_t set = H5Dcreate2(file, name.c_str(), type, space, H5P_DEFAULT, props, H5P_DEFAULT);
-  if (set < 0) throw std::runtime_error("HDF5: cannot create dataset " + name);
-  check(H5Dwrite(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), "write " + name);
-  H5Dclose(set);
+  herr_t written = set < 0 ? -1 : H5Dwrite(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
+  int error = errno;
+  if (set >= 0 && H5Dclose(set) < 0 && written >= 0) written = -1, error = errno;  // the chunk cache is flushed here
   H5Pclose(props);
   H5Sclose(space);
+  errno = error;
+  check(written, "write dataset " + name);
 }
 }  // namespace
 
 Hdf5Writer::Hdf5Writer(const std::filesystem::path& path) : file_(path) {
-  handle_ = H5Fcreate(file_.temporary_path().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-  if (handle_ < 0) throw std::runtime_error("HDF5: cannot create " + file_.temporary_path().string());
+  // The first kSealBytes are HDF5's user block: commit() writes the seal there (file_integrity.hpp).
+  const hid_t create = H5Pcreate(H5P_FILE_CREATE);
+  H5Pset_userblock(create, kSealBytes);
+  errno = 0;
+  handle_ = H5Fcreate(file_.temporary_path().c_str(), H5F_ACC_TRUNC, create, H5P_DEFAULT);
+  H5Pclose(create);
+  if (handle_ < 0) throw std::runtime_error("HDF5: cannot create " + file_.temporary_path().string() + (errno != 0 ? std::string(": ") + std::strerror(errno) : ""));
 }
 
 Hdf5Writer::~Hdf5Writer() {
@@ -79,8 +102,11 @@ void Hdf5Writer::attribute(const std::string& name, double value) {
 }
 
 void Hdf5Writer::commit() {
-  check(H5Fclose(handle_), "close");
+  errno = 0;
+  const herr_t closed = H5Fclose(handle_);
   handle_ = -1;
+  check(closed, "finish " + file_.temporary_path().string());
+  seal_file(file_.temporary_path());
   file_.commit();
 }
 

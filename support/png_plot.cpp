@@ -9,22 +9,42 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <cerrno>
+#include <csignal>
+
+#include <fcntl.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 namespace drom {
 
 namespace {
 
-std::string quoted(const std::filesystem::path& p) {
-  std::string s = "'";
-  for (char c : p.string()) s += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return s + "'";
-}
-
 nlohmann::json finite(const std::vector<double>& v) {
   nlohmann::json a = nlohmann::json::array();
   for (double d : v) a.push_back(std::isfinite(d) ? nlohmann::json(d) : nlohmann::json(nullptr));  // gaps in the line
   return a;
+}
+
+// python3 script spec png, as a child that dies with drom: a drom killed mid-plot (SIGKILL) must not
+// leave a plotter writing into its folder after it (docs/robustness.md). The exit status, -1 if none.
+int run_plotter(const std::filesystem::path& script, const std::filesystem::path& spec, const std::filesystem::path& png) {
+  const pid_t parent = ::getpid();
+  const pid_t child = ::fork();
+  if (child < 0) return -1;
+  if (child == 0) {
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) ::_exit(1);  // the parent died before the line above
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, 1), ::dup2(null, 2);
+    ::execl("/usr/bin/python3", "python3", script.c_str(), spec.c_str(), png.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  int status = 0;
+  while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 }  // namespace
@@ -55,7 +75,7 @@ bool write_png_plot(const std::filesystem::path& png, const PlotSpec& spec) {
   std::ofstream(spec_file) << j.dump();
   std::ofstream(script_file) << kPlotScript;
   AtomicFile out(png);
-  const int rc = std::system(("/usr/bin/python3 " + quoted(script_file) + " " + quoted(spec_file) + " " + quoted(out.temporary_path()) + " >/dev/null 2>&1").c_str());
+  const int rc = run_plotter(script_file, spec_file, out.temporary_path());
   std::filesystem::remove(spec_file);
   std::filesystem::remove(script_file);
   if (rc != 0 || !std::filesystem::exists(out.temporary_path())) return false;

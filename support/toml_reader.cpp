@@ -41,7 +41,8 @@ struct TomlReader::Impl {
     while (std::getline(ss, part, '.')) parts.push_back(part);
     return parts;
   }
-  static bool is_index(const std::string& s) { return !s.empty() && s.find_first_not_of("0123456789") == std::string::npos; }
+  // An array index: digits, few enough for stoul (an array of a billion entries is no case file).
+  static bool is_index(const std::string& s) { return !s.empty() && s.size() <= 9 && s.find_first_not_of("0123456789") == std::string::npos; }
 
   toml::node* find(const std::string& key) {
     toml::node* node = &root;
@@ -73,7 +74,7 @@ TomlReader::~TomlReader() = default;
 
 void TomlReader::apply_override(const std::string& assignment) {
   const auto eq = assignment.find('=');
-  if (eq == std::string::npos || eq == 0) throw InputError("--set '" + assignment + "': expected key=value");
+  if (eq == std::string::npos || eq == 0) throw InputError("--set '" + printable(assignment) + "': expected key=value");
   const std::string key = assignment.substr(0, eq), value = assignment.substr(eq + 1);
   toml::table parsed;
   try {
@@ -90,7 +91,7 @@ void TomlReader::apply_override(const std::string& assignment) {
     } else if (auto* a = node->as_array(); a && Impl::is_index(parts[i]) && std::stoul(parts[i]) < a->size()) {
       node = a->get(std::stoul(parts[i]));
     } else {
-      throw InputError("--set " + key + ": '" + parts[i] + "' is not a table in the case");
+      throw InputError("--set " + printable(key) + ": '" + printable(parts[i]) + "' is not a table in the case");
     }
   }
   if (auto* t = node->as_table()) {
@@ -98,7 +99,7 @@ void TomlReader::apply_override(const std::string& assignment) {
   } else if (auto* a = node->as_array(); a && Impl::is_index(parts.back()) && std::stoul(parts.back()) < a->size()) {
     a->replace(a->begin() + static_cast<std::ptrdiff_t>(std::stoul(parts.back())), *parsed.get("v"));
   } else {
-    throw InputError("--set " + key + ": cannot assign inside a value");
+    throw InputError("--set " + printable(key) + ": cannot assign inside a value");
   }
   impl_->overridden.insert(key);
 }
@@ -108,11 +109,11 @@ void TomlReader::fail(const std::string& key, const std::string& message) const 
   const std::string sep = message.rfind("= ", 0) == 0 ? " " : ": ";
   std::ostringstream msg;
   if (impl_->overridden.count(key)) {
-    msg << "--set " << key << sep << message;
+    msg << "--set " << printable(key) << sep << message;
   } else if (auto* node = impl_->find(key); node && node->source().begin.line > 0) {
-    msg << origin_ << ":" << node->source().begin.line << ": " << key << sep << message;
+    msg << origin_ << ":" << node->source().begin.line << ": " << printable(key) << sep << message;
   } else {
-    msg << origin_ << ": " << key << sep << message;
+    msg << origin_ << ": " << printable(key) << sep << message;
   }
   throw InputError(msg.str());
 }

@@ -145,3 +145,15 @@ TEST(CaseFile, MeasuredProfileTableIsFittedToTheBasis) {
     EXPECT_NE(std::string(err.what()).find("bad_profile.csv:3: column 2 is not a number"), std::string::npos) << err.what();
   }
 }
+
+// Issue 27: what the fuzzer found in --set (fuzz/case_overrides.cpp, docs/robustness.md).
+TEST(CaseFile, HostileOverridesAreAClearErrorQuotingTheirBytes) {
+  // The finding: a NUL in an override cut the message to "--set cl"; bytes that are not text are now
+  // quoted as \xNN.
+  const std::string with_nul("cl\0\0\0\xc7\xf5\x92\x9ash.n", 13);
+  EXPECT_EQ(error_of({"mesh.ny=18", with_nul}), "--set 'cl\\x00\\x00\\x00\\xc7\\xf5\\x92\\x9ash.n': expected key=value");
+  // Found reading the code around it: an array index past stoul's range was an std::out_of_range, not an InputError.
+  EXPECT_NE(error_of({"clamps.99999999999999999999.face=top"}).find("--set clamps.99999999999999999999.face: '99999999999999999999' is not a table"),
+            std::string::npos)
+      << error_of({"clamps.99999999999999999999.face=top"});
+}

@@ -23,6 +23,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 namespace {
 
@@ -103,6 +104,40 @@ TEST(StepFace, ErrorsNameTheFile) {
   const fs::path one = scratch("one.step");
   write_step(bezier_face(drom::tests::rubio_surface()), one);
   EXPECT_EQ(error(one, 2), one.string() + ": face 2 asked for, but the file holds 1 face (1-based)");
+}
+
+// Fuzz finding (docs/robustness.md): a vertex whose point entity has a damaged type name makes
+// OpenCASCADE 7.6.3 dereference a null point (StepGeom_CartesianPoint::NbCoordinates, SIGSEGV).
+// The file is read in a child process, so drom reports it and lives on.
+TEST(StepFace, AFileThatCrashesOpenCascadeIsAClearErrorAndDromLivesOn) {
+  const fs::path file = scratch("damaged_vertex.step");
+  write_step(bezier_face(drom::tests::rubio_surface()), file);
+  std::ifstream in(file);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string step = text.str();
+  in.close();
+  const std::string vertex = "VERTEX_POINT('',";
+  const auto at = step.find(vertex);
+  ASSERT_NE(at, std::string::npos);
+  const std::string point = step.substr(at + vertex.size(), step.find(')', at) - at - vertex.size()) + " = CARTESIAN_POINT";
+  const auto where = step.find(point);
+  ASSERT_NE(where, std::string::npos) << point;
+  step.replace(where, point.size(), point.substr(0, point.size() - 15) + "CARTESI[N_POINT");
+  std::ofstream(file) << step;
+  const auto error = [](const fs::path& f, int index) -> std::string {
+    try {
+      drom::geometry::read_step_face(f, index);
+    } catch (const drom::InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(error(file, 1).rfind(file.string() + ": OpenCASCADE crashed reading it (Segmentation fault)", 0), 0u) << error(file, 1);
+  // The process still reads a sound file afterwards.
+  const fs::path sound = scratch("sound.step");
+  write_step(bezier_face(drom::tests::rubio_surface()), sound);
+  EXPECT_EQ(drom::geometry::count_step_faces(sound), 1);
 }
 
 }  // namespace

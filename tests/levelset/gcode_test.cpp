@@ -84,6 +84,19 @@ TEST(GCode, ArcsOutOfTheXyPlaneBecomeChordsAndCannedCyclesAreRead) {
   EXPECT_EQ(drilled.moves[3].source_line, 3);
 }
 
+// Issue 27: what the fuzzer found (fuzz/gcode.cpp, docs/robustness.md), each with the error expected.
+TEST(GCode, HostileProgramsAreAClearErrorNotUndefinedBehaviourNorABoundlessPath) {
+  // The first fuzz finding: an M word of 108 digits was cast to int (UBSan: float-cast-overflow).
+  const std::string long_m = error_of("M" + std::string(107, '4') + "1M0\xe8S1M0M0S1");
+  EXPECT_NE(long_m.find("prog.nc:1: word 'M4444"), std::string::npos) << long_m;
+  EXPECT_NE(long_m.find("' is not a code drom knows"), std::string::npos) << long_m;
+  // A byte that is not text is named by its code (and no interpreter is asked about it).
+  EXPECT_NE(error_of(std::string("G0 X0\n\x01G1\n", 10)).find("prog.nc:2: expected a word letter, got '\\x01'"), std::string::npos);
+  // 10^4 turns of an XZ circle of 0.9 km, in 1 um chords: 6.7e8 moves refused before one is made.
+  const std::string helix = error_of("G0 X0 Y0 Z0\nG18 G2 X0 Z0 I900000 K0 P10000 F100\n");
+  EXPECT_NE(helix.find("prog.nc:2: the program's moves (arcs split into turns and chords) pass 2000000"), std::string::npos) << helix;
+}
+
 TEST(GCode, WriteThenReadReproducesMoves) {
   Toolpath path;
   Move a;

@@ -133,4 +133,16 @@ FINI
   EXPECT_NE(message("GOTO/0,0,0,0,0,0\n").find("zero"), std::string::npos);
   EXPECT_NE(message("CYCLE/DRILL,5\n").find("CYCLE"), std::string::npos);
   EXPECT_NE(message("GOTO/0,0,$\n").find("continued"), std::string::npos);
+  EXPECT_NE(message("GOTO/1e300,0,0\n").find("bad.apt:1: x: 1e300 is beyond any machine (|value| <= 1e6)"), std::string::npos);
+}
+
+// Fuzz finding (docs/robustness.md, finding 13): a header naming a column twice, then a short row,
+// made the reader index past the row (ASan: SEGV in strtod).
+TEST(ClFiles, ATableHeaderNamingAColumnTwiceIsRefused) {
+  try {
+    parse_cl_csv("x,y,z,x,i,j,k,feed\n0,0,0\n", "bad.csv");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "bad.csv:1: the CL table's header names column 'x' twice");
+  }
 }

@@ -147,6 +147,70 @@ TEST(ProgramReader, BadProgramsNameTheirLine) {
   }
 }
 
+// Fuzz findings (docs/robustness.md): numbers that no machine takes are refused by name, never cast
+// out of range nor read as another code.
+TEST(ProgramReader, HostileNumbersAreRefusedByName) {
+  auto message = [](const std::string& text) {
+    try {
+      parse_plain_gcode(text, "prog.nc");
+    } catch (const OutsidePlainSubset& e) {
+      return "outside: " + std::string(e.what());
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string m108 = message("M" + std::string(107, '4') + "1M0\xe8S1");
+  EXPECT_EQ(m108.rfind("prog.nc:1: word 'M4444", 0), 0u) << m108;
+  EXPECT_NE(m108.find("...' is not a code drom knows"), std::string::npos) << m108;
+  EXPECT_EQ(message("G99999999999999999999 X1\n"), "prog.nc:1: word 'G99999999999999999999' is not a code drom knows");
+  EXPECT_EQ(message("G0.05 X1\n"), "prog.nc:1: word 'G0.05' is not a code drom knows");
+  EXPECT_EQ(message("G0 X0 Y0 Z0\nG43 H123456789012 Z1\n"), "prog.nc:2: word 'H123456789012' is not a code drom knows");
+  EXPECT_EQ(message("G0 X0 Y0 Z0\nG1 X5 F-1\n"), "prog.nc:2: F must be positive");
+  EXPECT_EQ(message("G0 X0 Y0 Z0\nG2 X1 Y0 R2000000 F100\n"), "prog.nc:2: word R2000000 is beyond any machine (|value| <= 1e6)");
+  EXPECT_EQ(message("G0 X" + std::string(400, '9') + "\n").rfind("prog.nc:1: word X9999", 0), 0u);  // past a double: infinite
+  EXPECT_NE(message("G0 X" + std::string(400, '9') + "\n").find("is beyond any machine"), std::string::npos);
+  EXPECT_EQ(message("G0 X0 Y0 Z0\nG3 X0 Y0 I1 J0 P20000 F100\n"), "prog.nc:2: arc P (turns) must be a whole number from 1 to 10000");
+  EXPECT_EQ(message("G0 X0\n\x01G1\n"), "prog.nc:2: expected a word letter, got '\\x01'");
+  // strtod's forms are not G-code numbers: no number, or a word the plain reader leaves to rs274.
+  EXPECT_EQ(message("G0 Xnan\n"), "prog.nc:1: word 'X' has no number");
+  EXPECT_EQ(message("G0 X-inf\n"), "prog.nc:1: word 'X' has no number");
+  EXPECT_EQ(message("G0 X1e400\n").rfind("outside: prog.nc:1: an E word", 0), 0u);
+  // 5-axis words are bounded the same way.
+  EXPECT_EQ(message("G0 X0 Y0 Z0\nG1 A1000001 F100\n"), "prog.nc:2: word A1000001 is beyond any machine (|value| <= 1e6)");
+}
+
+// Fuzz findings on drom's side of rs274 (fuzz/rs274_calls.cpp, docs/robustness.md): what the
+// interpreter prints is read as outside data too.
+TEST(ProgramReader, HostileInterpreterOutputIsAClearErrorNamingTheProgram) {
+  using drom::machine::parse_rs274_calls;
+  const std::string head = "executing\n    1 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n";
+  // A line number beyond any number (std::stoll threw std::out_of_range): no line of the program.
+  const auto program = parse_rs274_calls(head + "    2 N2222222222222222222222222222SET_FEED_RATE(300.0000)\n"
+                                                "    3 N100000002STRAIGHT_FEED(5.0000, 0.0000, 1.0000, 0.0000, 0.0000, 0.0000)\n",
+                                         0, "hostile.ngc");
+  ASSERT_EQ(program.moves.size(), 1u);
+  EXPECT_EQ(program.moves[0].line, 2);
+  const auto error = [](const std::string& calls, int status) -> std::string {
+    try {
+      parse_rs274_calls(calls, status, "hostile.ngc");
+    } catch (const drom::InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  // A coordinate past a double: infinite, never a position.
+  EXPECT_EQ(error(head + "    2 N100000003STRAIGHT_FEED(1e999, 0.0000, 1.0000, 0.0000, 0.0000, 0.0000)\n", 0),
+            "hostile.ngc:3: rs274 printed STRAIGHT_FEED with a value beyond any finite number: 1e999, 0.0000, 1.0000, 0.0000, 0.0000, 0.0000");
+  // Words are not numbers ("inf" and "nan" are not read as such); too few values is refused.
+  EXPECT_EQ(error(head + "    2 N100000003STRAIGHT_FEED(inf, nan, 1.0000)\n", 0), "hostile.ngc:3: rs274 printed STRAIGHT_FEED with 1 values");
+  // A comment may hold any text.
+  EXPECT_NO_THROW(parse_rs274_calls(head + "    2 N100000003COMMENT(\"inf 1e999 nan\")\n", 0, "hostile.ngc"));
+  // An interpreter that stopped names its complaint and the line.
+  EXPECT_EQ(error(head + "    2 N100000004STRAIGHT_TRAVERSE(1.0000, 0.0000, 1.0000, 0.0000, 0.0000, 0.0000)\nBad character used\nN100000004 G1 X1 @\n", 1),
+            "hostile.ngc:4: LinuxCNC's interpreter: Bad character used");
+}
+
 TEST(ProgramReader, RotaryWordsOnAThreeAxisMachineNameTheLine) {
   const NcProgram p = parse_plain_gcode("G21 G90\nG0 X0 Y0 Z5\nG1 X10 F100\nG1 X20 A30\n", "five.ngc");
   try {

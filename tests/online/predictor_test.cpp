@@ -2,7 +2,7 @@
 // inside the basis, calibration of its uncertainty, dropped points, the learning phase and rate
 // limit, the ball end mill's offset, and concurrent ingest and queries.
 #include "online/predictor.hpp"
-#include "tests/online/exact_reading.hpp"
+#include "tests/online/synthetic_profiles.hpp"
 #include "tests/reduce/synthetic_model.hpp"
 
 #include <Eigen/Cholesky>
@@ -15,52 +15,11 @@
 
 using namespace drom;
 using online::MeasuredPoint;
+using test::profile;
+using test::profile_times;
+using test::tool_at;
 
 namespace {
-
-// Program time -> tool tip on the synthetic path (linear between waypoints).
-Eigen::Vector3d tool_at(const reduce::LightModel& m, double t) {
-  const Eigen::VectorXd times = m.path.col(3);
-  const auto [i, w] = reduce::locate_time(times, t);
-  return ((1 - w) * m.path.row(i).head<3>() + w * m.path.row(i + 1).head<3>()).transpose();
-}
-
-// What the sensor reads at (x, y) and time t for coefficients alpha (tests/online/exact_reading.hpp),
-// w written with the model's own fields, the offsets applied so far a step function of time.
-double reading(const reduce::LightModel& m, const Eigen::VectorXd& alpha, double x, double y, double t, const std::function<double(double)>& offset) {
-  static std::vector<double> changes = {30, 60};  // where the tests' offset functions step
-  const auto w = [&](const reduce::SurfacePoint& p, double tau) {
-    double v = 0;
-    for (int q = 0; q < p.count; ++q)
-      for (int k = 0; k < m.rank(); ++k)
-        v += alpha[k] * p.weights[static_cast<std::size_t>(q)] * m.histories[static_cast<std::size_t>(k)].at(p.nodes[static_cast<std::size_t>(q)], tau);
-    return v;
-  };
-  const Eigen::VectorXd& instants = m.histories.front().times();
-  const test::ExactReading exact(m, w, offset, changes, std::vector<double>(instants.data(), instants.data() + instants.size()));
-  return exact(x, y, t);
-}
-
-// A profile across the feed, 30 mm behind the tool, 80 mm long, 800 points.
-std::vector<MeasuredPoint> profile(const reduce::LightModel& m, const Eigen::VectorXd& alpha, double t, double noise, std::mt19937& rng,
-                                   const std::function<double(double)>& offset) {
-  const Eigen::Vector3d tool = tool_at(m, t);
-  std::normal_distribution<double> gauss(0, noise);
-  std::vector<MeasuredPoint> pts;
-  for (int i = 0; i < 800; ++i) {
-    const double x = tool.x() - 30, y = tool.y() - 40 + 80.0 * i / 799;
-    const double z = reading(m, alpha, x, y, t, offset);
-    pts.push_back({x, y, std::isnan(z) ? z : z + (noise > 0 ? gauss(rng) : 0)});
-  }
-  return pts;
-}
-
-std::vector<double> profile_times() {
-  std::vector<double> t;
-  for (int p = 0; p < 5; ++p)
-    for (int k = 1; k <= 10; ++k) t.push_back(p * 25.0 + 2.0 * k - 0.5);  // during each pass's cutting
-  return t;
-}
 
 double no_offset(double) { return 0.0; }
 
@@ -145,7 +104,7 @@ TEST(Predictor, DropsAndCountsWhatIsNotTheMachinedSurface) {
   const double t = 10;  // first pass, tool at x = 100
   const Eigen::Vector3d tool = tool_at(m, t);
   std::vector<MeasuredPoint> pts;
-  pts.push_back({tool.x() - 20, 10, reading(m, alpha, tool.x() - 20, 10, t, no_offset)});  // good
+  pts.push_back({tool.x() - 20, 10, test::reading(m, alpha, tool.x() - 20, 10, t, no_offset)});  // good
   pts.push_back({tool.x() - 20, 12, std::nan("")});                                       // no reading
   pts.push_back({-5, 10, 8.0});                                                            // off the target surface
   pts.push_back({tool.x() + 40, 10, 10.0});                                                // ahead of the tool: not cut yet
@@ -157,7 +116,8 @@ TEST(Predictor, DropsAndCountsWhatIsNotTheMachinedSurface) {
   EXPECT_EQ(r.outside, 1);
   EXPECT_EQ(r.not_yet_cut, 2);
   EXPECT_EQ(r.out_of_range, 1);
-  EXPECT_THROW(predictor.add_profile(5, {tool, 0.0}, pts), std::invalid_argument);  // out of time order
+  EXPECT_EQ(predictor.add_profile(5, {tool, 0.0}, pts).rejected, std::string("older than the last profile"));  // out of time order: left out, not an error
+  EXPECT_EQ(predictor.rejections().out_of_order, 1);
 }
 
 TEST(Predictor, NoOffsetUntilLearnedThenTheEstimateRateLimited) {
