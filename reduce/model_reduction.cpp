@@ -14,7 +14,8 @@ SpaceTimeField compressed_history(const Eigen::MatrixXd& scaled, double sigma, c
   const SpaceTimeField field(scaled, times, tolerance, start);
   const Eigen::MatrixXd space = field.space().cast<float>().cast<double>();
   const Eigen::MatrixXd time = (field.time() / sigma).cast<float>().cast<double>();
-  const double error = (scaled - sigma * space * time.bottomRows(times.size()).transpose()).cwiseAbs().maxCoeff();  // (a start instant may lead)
+  const double error = field.terms() == 0 ? (scaled.size() > 0 ? scaled.cwiseAbs().maxCoeff() : 0.0)
+                                           : (scaled - sigma * space * time.bottomRows(times.size()).transpose()).cwiseAbs().maxCoeff();  // (a start instant may lead)
   terms += field.terms();
   return SpaceTimeField(space, time, field.times(), error / sigma);
 }

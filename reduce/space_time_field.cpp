@@ -40,7 +40,9 @@ SpaceTimeField::SpaceTimeField(const Eigen::MatrixXd& history, const Eigen::Vect
   }
   space_ = full.modes.leftCols(hi);
   time_ = Eigen::MatrixXd::Zero(times_.size(), hi);
-  time_.bottomRows(times.size()) = scaled_right.leftCols(hi);
+  // No term kept (a history within the tolerance everywhere): no block of an empty matrix, whose
+  // null data Eigen would offset (UBSan; the database_fields fuzzer, finding 24).
+  if (hi > 0) time_.bottomRows(times.size()) = scaled_right.leftCols(hi);
   bound_ = error_with(hi);
 }
 
