@@ -58,6 +58,7 @@ Eigen::VectorXd SpaceTimeField::time_factors(double t) const {
 }
 
 void SpaceTimeField::time_factors(double t, Eigen::Ref<Eigen::VectorXd> out) const {
+  if (terms() == 0) return;  // no row to take of an empty matrix (finding 24)
   if (times_.size() == 0) {
     out.setZero();
   } else if (times_.size() == 1) {
