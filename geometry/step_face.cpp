@@ -1,5 +1,6 @@
 #include "geometry/step_face.hpp"
 
+#include "support/byte_stream.hpp"
 #include "support/input_error.hpp"
 
 #include <BRepTools.hxx>
@@ -146,113 +147,64 @@ StepFace read_face_here(const std::filesystem::path& path, int index) {
 // that sends back drom's own types as bytes; a child that dies or hangs becomes an InputError naming
 // the file. The parent checks what it receives as it would any outside data.
 
-class Bytes {
- public:
-  void put(double x) { raw(&x, sizeof x); }
-  void put(std::int64_t n) { raw(&n, sizeof n); }
-  void put(const std::string& text) {
-    put(static_cast<std::int64_t>(text.size()));
-    bytes_ += text;
-  }
-  void put(const std::vector<double>& v) {
-    put(static_cast<std::int64_t>(v.size()));
-    for (const double x : v) put(x);
-  }
-  const std::string& str() const { return bytes_; }
-
- private:
-  void raw(const void* p, std::size_t n) { bytes_.append(static_cast<const char*>(p), n); }
-  std::string bytes_;
-};
-
-class BytesReader {
- public:
-  BytesReader(std::string_view bytes, std::string origin) : bytes_(bytes), origin_(std::move(origin)) {}
-  double number() {
-    double x = 0;
-    raw(&x, sizeof x);
-    if (!std::isfinite(x)) throw InputError(origin_ + ": OpenCASCADE's face holds a number that is not finite");
-    return x;
-  }
-  std::int64_t count(std::int64_t most) {
-    std::int64_t n = 0;
-    raw(&n, sizeof n);
-    if (n < 0 || n > most) throw InputError(origin_ + ": OpenCASCADE's face holds a count of " + std::to_string(n) + ", expected 0 to " + std::to_string(most));
-    return n;
-  }
-  std::string text() {
-    const auto n = static_cast<std::size_t>(count(4096));
-    need(n);
-    std::string t(bytes_.substr(at_, n));
-    at_ += n;
-    return t;
-  }
-  std::vector<double> numbers(std::int64_t most) {
-    std::vector<double> v(static_cast<std::size_t>(count(most)));
-    for (double& x : v) x = number();
-    return v;
-  }
-  bool done() const { return at_ == bytes_.size(); }
-
- private:
-  void need(std::size_t n) const {
-    if (bytes_.size() - at_ < n) throw InputError(origin_ + ": OpenCASCADE's reader sent a cut answer");
-  }
-  void raw(void* p, std::size_t n) {
-    need(n);
-    std::memcpy(p, bytes_.data() + at_, n);
-    at_ += n;
-  }
-  std::string_view bytes_;
-  std::string origin_;
-  std::size_t at_ = 0;
-};
-
 // Bounds on what one face may hold: far above any CAD face, low enough that a damaged answer
 // cannot ask for gigabytes.
 constexpr std::int64_t kMostPoles = 1 << 22, kMostKnots = 1 << 16, kMostLoops = 1 << 16, kMostLoopPoints = 1 << 22;
 
 std::string encode(const StepFace& face) {
-  Bytes b;
+  ByteWriter b;
   const NurbsSurface& s = face.surface;
-  b.put(std::int64_t{s.degree_u()}), b.put(std::int64_t{s.degree_v()});
-  b.put(std::int64_t{s.count_u()}), b.put(std::int64_t{s.count_v()});
+  b.put<std::int64_t>(s.degree_u()), b.put<std::int64_t>(s.degree_v());
+  b.put<std::int64_t>(s.count_u()), b.put<std::int64_t>(s.count_v());
   b.put(s.knots_u()), b.put(s.knots_v());
   std::vector<double> xyz;
   for (const auto& p : s.points()) xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
   b.put(xyz);
   b.put(s.is_rational() ? s.weights() : std::vector<double>{});
-  b.put(static_cast<std::int64_t>(face.trim.loops().size()));
+  b.put<std::int64_t>(static_cast<std::int64_t>(face.trim.loops().size()));
   for (const auto& loop : face.trim.loops()) {
     std::vector<double> uv;
     for (const auto& q : loop) uv.insert(uv.end(), {q.x(), q.y()});
     b.put(uv);
   }
-  b.put(face.source_type);
-  b.put(std::int64_t{face.reversed ? 1 : 0});
-  return b.str();
+  b.put(std::string_view(face.source_type));
+  b.put<std::int64_t>(face.reversed ? 1 : 0);
+  return b.take();
 }
 
 StepFace decode(std::string_view bytes, const std::string& origin, int index) {
-  BytesReader r(bytes, origin);
-  const auto degree_u = static_cast<int>(r.count(64)), degree_v = static_cast<int>(r.count(64));
-  const auto count_u = static_cast<int>(r.count(kMostPoles)), count_v = static_cast<int>(r.count(kMostPoles));
-  auto knots_u = r.numbers(kMostKnots), knots_v = r.numbers(kMostKnots);
-  const auto xyz = r.numbers(3 * kMostPoles);
-  auto weights = r.numbers(kMostPoles);
+  ByteReader r(bytes, origin + ": OpenCASCADE's reader's answer");
+  const auto count = [&](std::int64_t most) {
+    const auto n = r.get<std::int64_t>();
+    if (n < 0 || n > most) throw InputError(origin + ": OpenCASCADE's face holds a count of " + std::to_string(n) + ", expected 0 to " + std::to_string(most));
+    return n;
+  };
+  const auto numbers = [&](std::int64_t most) {
+    auto v = r.vector<double>();
+    if (static_cast<std::int64_t>(v.size()) > most)
+      throw InputError(origin + ": OpenCASCADE's face holds " + std::to_string(v.size()) + " numbers where " + std::to_string(most) + " at most are expected");
+    for (const double x : v)
+      if (!std::isfinite(x)) throw InputError(origin + ": OpenCASCADE's face holds a number that is not finite");
+    return v;
+  };
+  const auto degree_u = static_cast<int>(count(64)), degree_v = static_cast<int>(count(64));
+  const auto count_u = static_cast<int>(count(kMostPoles)), count_v = static_cast<int>(count(kMostPoles));
+  auto knots_u = numbers(kMostKnots), knots_v = numbers(kMostKnots);
+  const auto xyz = numbers(3 * kMostPoles);
+  auto weights = numbers(kMostPoles);
   if (xyz.size() != 3 * static_cast<std::size_t>(count_u) * static_cast<std::size_t>(count_v))
     throw InputError(origin + ": face " + std::to_string(index) + ": " + std::to_string(xyz.size() / 3) + " control points for a " + std::to_string(count_u) + " x " +
                      std::to_string(count_v) + " net");
   std::vector<Eigen::Vector3d> points;
   for (std::size_t k = 0; k < xyz.size(); k += 3) points.emplace_back(xyz[k], xyz[k + 1], xyz[k + 2]);
-  std::vector<std::vector<Eigen::Vector2d>> loops(static_cast<std::size_t>(r.count(kMostLoops)));
+  std::vector<std::vector<Eigen::Vector2d>> loops(static_cast<std::size_t>(count(kMostLoops)));
   for (auto& loop : loops) {
-    const auto uv = r.numbers(2 * kMostLoopPoints);
+    const auto uv = numbers(2 * kMostLoopPoints);
     for (std::size_t k = 0; k + 1 < uv.size(); k += 2) loop.emplace_back(uv[k], uv[k + 1]);
   }
   StepFace face;
   face.source_type = r.text();
-  face.reversed = r.count(1) == 1;
+  face.reversed = count(1) == 1;
   if (!r.done()) throw InputError(origin + ": OpenCASCADE's reader sent more than one face");
   try {
     face.surface = NurbsSurface(degree_u, degree_v, std::move(knots_u), std::move(knots_v), count_u, count_v, std::move(points), std::move(weights));

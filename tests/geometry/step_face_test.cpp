@@ -52,6 +52,16 @@ TopoDS_Face bezier_face(const drom::geometry::NurbsSurface& s) {
   return BRepBuilderAPI_MakeFace(new Geom_BezierSurface(poles), 1e-7).Face();
 }
 
+// The InputError reading face `index` of `file` gives; empty when it reads.
+std::string error(const fs::path& file, int index) {
+  try {
+    drom::geometry::read_step_face(file, index);
+  } catch (const drom::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
 TEST(StepFace, BezierTestSurfacesRoundTripTo1e9) {
   for (const auto& [name, surface] : {std::pair{"rubio", drom::tests::rubio_surface()}, std::pair{"choi", drom::tests::choi_surface()}}) {
     const fs::path file = scratch(std::string(name) + ".step");
@@ -85,14 +95,6 @@ TEST(StepFace, TrimmedFaceKeepsItsLoops) {
 }
 
 TEST(StepFace, ErrorsNameTheFile) {
-  const auto error = [](const fs::path& file, int index) -> std::string {
-    try {
-      drom::geometry::read_step_face(file, index);
-    } catch (const drom::InputError& e) {
-      return e.what();
-    }
-    return "";
-  };
   const fs::path missing = scratch("missing.step");
   EXPECT_EQ(error(missing, 1), missing.string() + ": no such STEP file");
   const fs::path vertex = scratch("vertex.step");
@@ -125,14 +127,6 @@ TEST(StepFace, AFileThatCrashesOpenCascadeIsAClearErrorAndDromLivesOn) {
   ASSERT_NE(where, std::string::npos) << point;
   step.replace(where, point.size(), point.substr(0, point.size() - 15) + "CARTESI[N_POINT");
   std::ofstream(file) << step;
-  const auto error = [](const fs::path& f, int index) -> std::string {
-    try {
-      drom::geometry::read_step_face(f, index);
-    } catch (const drom::InputError& e) {
-      return e.what();
-    }
-    return "";
-  };
   EXPECT_EQ(error(file, 1).rfind(file.string() + ": OpenCASCADE crashed reading it (Segmentation fault)", 0), 0u) << error(file, 1);
   // The process still reads a sound file afterwards.
   const fs::path sound = scratch("sound.step");
