@@ -38,6 +38,7 @@
 #include <cstdio>
 #include <cstring>
 #include <functional>
+#include <mutex>
 #include <sstream>
 
 namespace drom::geometry {
@@ -224,10 +225,23 @@ void write_all(int fd, const std::string& bytes) {
   }
 }
 
+// The STEP translator's static tables (the AP203/AP214 schema's entity types, its parameters) are
+// built once, in drom's own process, so that every child inherits them and starts reading at once
+// instead of building them again: with them built here a small file is read in a fraction of the time.
+// Building them reads no file; only the translation of a file runs in the child.
+void prepare_translator() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    Message::DefaultMessenger()->ChangePrinters().Clear();
+    STEPControl_Reader warm;
+  });
+}
+
 // `work` run in a child process: its answer's bytes, or its InputError rethrown here. A child that
 // crashes, stops without an answer or outlives `limit` is an InputError naming the file.
 std::string in_child_process(const std::filesystem::path& path, const std::function<std::string()>& work, std::chrono::seconds limit) {
   const std::string origin = path.string();
+  prepare_translator();
   int pipe_fds[2];
   if (::pipe2(pipe_fds, O_CLOEXEC) != 0) throw InputError(origin + ": cannot start OpenCASCADE's reader: " + std::strerror(errno));
   std::fflush(nullptr);

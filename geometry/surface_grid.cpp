@@ -29,8 +29,7 @@ SurfaceGrid sample_grid(const NurbsSurface& surface, int cells_u, int cells_v, G
   return g;
 }
 
-std::pair<int, int> cells_for_step(const NurbsSurface& surface, double step) {
-  if (!(step > 0)) throw std::invalid_argument("the mesh step must be positive");
+std::pair<double, double> longest_iso_curves(const NurbsSurface& surface) {
   constexpr int kProbe = 32;  // iso-curves measured, and points along each
   double longest_u = 0, longest_v = 0;
   for (int a = 0; a <= kProbe; ++a) {
@@ -50,7 +49,16 @@ std::pair<int, int> cells_for_step(const NurbsSurface& surface, double step) {
     longest_u = std::max(longest_u, lu);
     longest_v = std::max(longest_v, lv);
   }
-  return {std::max(1, static_cast<int>(std::ceil(longest_u / step))), std::max(1, static_cast<int>(std::ceil(longest_v / step)))};
+  return {longest_u, longest_v};
+}
+
+std::pair<int, int> cells_for_step(const NurbsSurface& surface, double step) {
+  if (!(step > 0)) throw std::invalid_argument("the mesh step must be positive");
+  const auto [lu, lv] = longest_iso_curves(surface);
+  // Past 10^6 cells a side the grid could not be held anyway (and the count must fit an int).
+  constexpr double kMaxCells = 1e6;
+  if (!(lu / step <= kMaxCells) || !(lv / step <= kMaxCells)) throw std::invalid_argument("the mesh step is too small for this surface (over 10^6 cells a side)");
+  return {std::max(1, static_cast<int>(std::ceil(lu / step))), std::max(1, static_cast<int>(std::ceil(lv / step)))};
 }
 
 }  // namespace drom::geometry

@@ -22,8 +22,10 @@ struct SurfaceGrid {
 // Throws std::domain_error where the surface has no normal (a degenerate patch).
 SurfaceGrid sample_grid(const NurbsSurface& surface, int cells_u, int cells_v, GridPlacement placement);
 
+// The longest iso-curve along u and along v (mm), measured on a coarse polygon.
+std::pair<double, double> longest_iso_curves(const NurbsSurface& surface);
 // Cell counts along u and v whose iso-lines are about `step` apart on the surface (the longest
-// iso-curve in each direction, measured on a coarse polygon), at least 1 each.
+// iso-curve in each direction), at least 1 each. Throws std::invalid_argument past 10^6 a side.
 std::pair<int, int> cells_for_step(const NurbsSurface& surface, double step);
 
 }  // namespace drom::geometry

@@ -1,5 +1,6 @@
 #include "paths/orient_run.hpp"
 
+#include "geometry/surface_grid.hpp"
 #include "geometry/surface_input.hpp"
 #include "machine/cl_data.hpp"
 #include "machine/feed_prediction.hpp"
@@ -11,6 +12,8 @@
 #include "support/toml_reader.hpp"
 #include "support/vtk_fields.hpp"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -18,6 +21,7 @@
 #include <iostream>
 #include <numbers>
 #include <sstream>
+#include <type_traits>
 
 namespace drom::paths {
 
@@ -28,6 +32,29 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 }  // namespace
 
+namespace {
+
+std::string count_text(double n) {
+  std::ostringstream out;
+  out.precision(3);
+  out << n;
+  return out.str();
+}
+
+// The check surfaces' area (mm²), from above: a patch counts as its longest iso-curves' product.
+double check_area(const std::vector<CheckPatch>& patches, const TriangleSoup& mesh) {
+  double area = 0;
+  for (const auto& p : patches) {
+    const auto [lu, lv] = geometry::longest_iso_curves(p.surface);
+    area += lu * lv;
+  }
+  for (const auto& t : mesh.triangles)
+    area += 0.5 * (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]).norm();
+  return area;
+}
+
+}  // namespace
+
 OrientCase parse_orient_case(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides) {
   TomlReader r(text, origin);
   for (const auto& o : overrides) r.apply_override(o);
@@ -36,13 +63,13 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
   const std::string kind = r.choice("scene.kind", {"bump", "corner", "impeller", "panel"});
   if (kind == "bump") {
     BumpOptions o;
-    o.lateral = r.real("scene.lateral", Range{}, o.lateral);
-    c.scene = bump_scene(o);
+    o.lateral = r.real("scene.lateral", Range::closed(-1e3, 1e3), o.lateral);
+    c.scene = o;
   } else if (kind == "corner") {
     CornerOptions o;
-    o.stick_out = r.real("scene.stick_out", Range::positive(), o.stick_out);
+    o.stick_out = r.real("scene.stick_out", Range::open_closed(0, 1e3), o.stick_out);
     o.roll = r.real("scene.roll", Range::closed(-1.2, 1.2), o.roll);
-    c.scene = corner_scene(o);
+    c.scene = o;
   } else if (kind == "impeller") {
     ImpellerOptions o;
     o.blades = static_cast<int>(r.integer("scene.blades", 2, 40, o.blades));
@@ -54,13 +81,24 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
     o.lead = r.real("scene.lead", Range::closed(-1, 1), o.lead);
     o.point_spacing = r.real("scene.point_spacing", Range::positive(), o.point_spacing);
     if (o.v_last < o.v_first) r.fail("scene.v_last", "must not be below scene.v_first");
-    c.scene = impeller_scene(o);
+    const int veins = o.veins < 0 ? o.blades : std::min(o.veins, o.blades);
+    // Counted before anything is built: a step of 1e-300 must be an error, not a night of allocation.
+    const double passes = (o.v_last - o.v_first) / o.v_step * veins;
+    if (!(passes <= OrientLimits::passes))
+      r.fail("scene.v_step", "asks for " + count_text(passes) + " passes; at most " + count_text(OrientLimits::passes) + " (a larger scene.v_step, or fewer scene.veins)");
+    const double points = impeller_cl_points(o);
+    if (!(points <= OrientLimits::cl_points))
+      r.fail("scene.point_spacing", "asks for " + count_text(points) + " CL points; at most " + count_text(OrientLimits::cl_points) + " (a larger scene.point_spacing)");
+    c.scene = o;
   } else {
     PanelOptions o;
     o.stepover = r.real("scene.stepover", Range::positive(), o.stepover);
     o.lead = r.real("scene.lead", Range::closed(-1, 1), o.lead);
-    o.clamp_height = r.real("scene.clamp_height", Range::positive(), o.clamp_height);
-    c.scene = panel_scene(o);
+    o.clamp_height = r.real("scene.clamp_height", Range::open_closed(0, 1e3), o.clamp_height);
+    const double passes = o.pocket / o.stepover;
+    if (!(passes <= OrientLimits::passes))
+      r.fail("scene.stepover", "asks for " + count_text(passes) + " passes; at most " + count_text(OrientLimits::passes));
+    c.scene = o;
   }
   // Extra check surfaces: patches or STL triangles (fixtures, clamps, a machine part).
   const std::filesystem::path base = std::filesystem::path(origin).parent_path();
@@ -69,32 +107,39 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
     if (r.has(k + ".stl")) {
       std::filesystem::path stl = r.text(k + ".stl");
       if (stl.is_relative()) stl = base / stl;
-      c.scene.check_mesh.append(read_stl_triangles(stl));
+      c.extra_mesh.append(read_stl_triangles(stl));
     } else {
       const bool flip = r.boolean(k + ".flip", false);
       const geometry::SurfaceInput s = geometry::read_surface(r, k, base);
-      c.scene.check_patches.push_back({k, s.surface, flip});
+      c.extra_patches.push_back({k, s.surface, flip});
     }
   }
-  ToolBody& t = c.scene.tool;
+  ToolBody& t = c.tool;
+  t = std::visit([](const auto& o) { return default_tool(o); }, c.scene);
   const std::string cutter = r.choice("tool.kind", {"ball", "torus"}, t.cutter.kind == ToolKind::ball ? "ball" : "torus");
-  t.cutter.radius = r.real("tool.radius", Range::positive(), t.cutter.radius);
+  t.cutter.radius = r.real("tool.radius", Range::open_closed(0, 1e3), t.cutter.radius);
   t.cutter.kind = cutter == "ball" ? ToolKind::ball : ToolKind::torus;
   t.cutter.corner_radius = cutter == "ball" ? t.cutter.radius : r.real("tool.corner_radius", Range::positive(), std::min(t.cutter.corner_radius, t.cutter.radius));
-  t.flute_length = r.real("tool.flute_length", Range::positive(), t.flute_length);
-  t.shank_radius = r.real("tool.shank_radius", Range::positive(), t.shank_radius);
-  t.stick_out = r.real("tool.stick_out", Range::positive(), t.stick_out);
+  t.flute_length = r.real("tool.flute_length", Range::open_closed(0, 1e4), t.flute_length);
+  t.shank_radius = r.real("tool.shank_radius", Range::open_closed(0, 1e3), t.shank_radius);
+  t.stick_out = r.real("tool.stick_out", Range::open_closed(0, 1e4), t.stick_out);
   if (r.has("tool.holder_z") || r.has("tool.holder_radius")) {
-    t.holder.z = r.reals("tool.holder_z", Range::non_negative());
-    t.holder.radius = r.reals("tool.holder_radius", Range::positive());
+    t.holder.z = r.reals("tool.holder_z", Range::closed(0, 1e4));
+    t.holder.radius = r.reals("tool.holder_radius", Range::open_closed(0, 1e3));
   }
-  c.tool_nodes = static_cast<int>(r.integer("tool.nodes", 0, 1000000, c.tool_nodes));
+  c.tool_nodes = static_cast<int>(r.integer("tool.nodes", 0, static_cast<long long>(OrientLimits::tool_nodes), c.tool_nodes));
   c.skin_spacing = r.real("tool.skin_spacing", Range::positive(), c.skin_spacing);
   try {
     t.check();
   } catch (const InputError& e) {
     r.fail("tool", e.what());
   }
+  if (c.tool_nodes == 0) {
+    const double nodes = tool_skin_area(t) / (c.skin_spacing * c.skin_spacing);
+    if (!(nodes <= OrientLimits::tool_nodes))
+      r.fail("tool.skin_spacing", "asks for " + count_text(nodes) + " skin nodes; at most " + count_text(OrientLimits::tool_nodes));
+  }
+  std::visit([&](auto& o) { o.tool = t; }, c.scene);
   // The model.
   RecallParameters& rp = c.dynamics.recall;
   rp.stiffness = r.real("model.k", Range::positive(), rp.stiffness);
@@ -102,7 +147,7 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
   rp.spacing = r.real("model.d0", Range::positive(), rp.spacing);
   c.obstacle_spacing = r.real("model.obstacle_spacing", Range::positive(), rp.spacing);
   c.khatib.eta = r.real("model.eta", Range::positive(), c.khatib.eta);
-  c.khatib.influence_radius = r.real("model.r0", Range::positive(), c.khatib.influence_radius);
+  c.khatib.influence_radius = r.real("model.r0", Range::open_closed(0, 1e3), c.khatib.influence_radius);
   const std::string agg = r.choice("model.aggregation", {"F1", "F2", "F3"}, "F1");
   c.aggregation = agg == "F1" ? Aggregation::F1 : agg == "F2" ? Aggregation::F2 : Aggregation::F3;
   const std::string moment = r.choice("model.moment", {"G", "lever", "direction"}, "direction");
@@ -127,9 +172,14 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
   if (c.voxel && c.aggregation != Aggregation::F1) r.fail("model.aggregation", "the voxel field stores F1 (the seed's eq. 4.2): use F1 or field.kind = \"direct\"");
   // The check and the machine.
   c.clearance.voxel = r.real("check.voxel", Range::positive(), c.clearance.voxel);
-  c.clearance.required = r.real("check.required", Range{}, c.clearance.required);
+  c.clearance.required = r.real("check.required", Range::closed(-1e3, 1e3), c.clearance.required);
   c.clearance.gouge_spacing = r.real("check.gouge_spacing", Range::positive(), c.clearance.gouge_spacing);
   c.machine = r.text("machine.definition", c.machine);
+  // The extra check surfaces' meshes, counted now (the scene's own surfaces are checked when built).
+  const double extra_area = check_area(c.extra_patches, c.extra_mesh);
+  if (!(extra_area / (c.obstacle_spacing * c.obstacle_spacing) <= OrientLimits::obstacle_points))
+    r.fail("model.obstacle_spacing", "meshes the check surfaces into " + count_text(extra_area / (c.obstacle_spacing * c.obstacle_spacing)) + " points; at most " +
+                                         count_text(OrientLimits::obstacle_points));
   r.finish();
   c.resolved = r.resolved_text();
   return c;
@@ -141,6 +191,37 @@ OrientCase load_orient_case(const std::filesystem::path& path, const std::vector
   std::stringstream text;
   text << in.rdbuf();
   return parse_orient_case(text.str(), path.string(), overrides);
+}
+
+OrientScene build_orient_scene(const OrientCase& c) {
+  OrientScene scene = std::visit(
+      [](const auto& o) {
+        using Options = std::decay_t<decltype(o)>;
+        if constexpr (std::is_same_v<Options, BumpOptions>) return bump_scene(o);
+        else if constexpr (std::is_same_v<Options, CornerOptions>) return corner_scene(o);
+        else if constexpr (std::is_same_v<Options, ImpellerOptions>) return impeller_scene(o);
+        else return panel_scene(o);
+      },
+      c.scene);
+  scene.check_patches.insert(scene.check_patches.end(), c.extra_patches.begin(), c.extra_patches.end());
+  scene.check_mesh.append(c.extra_mesh);
+  // What the meshes and grids of the run would hold (OrientLimits).
+  const double area = check_area(scene.check_patches, scene.check_mesh);
+  const std::string where = c.origin.string() + ": ";
+  const double points = area / (c.obstacle_spacing * c.obstacle_spacing);
+  if (!(points <= OrientLimits::obstacle_points))
+    throw InputError(where + "model.obstacle_spacing: meshes the check surfaces (" + count_text(area) + " mm²) into " + count_text(points) + " points; at most " +
+                     count_text(OrientLimits::obstacle_points));
+  if (c.voxel) {
+    const double h = c.voxel_settings.voxel, voxels = area * 2 * c.khatib.influence_radius / (h * h * h);
+    if (!(voxels <= OrientLimits::voxels))
+      throw InputError(where + "field.voxel: the force field around the check surfaces would hold " + count_text(voxels) + " voxels; at most " + count_text(OrientLimits::voxels));
+  }
+  const double h = c.clearance.voxel, band = scene.tool.body_profile().max_radius() + std::max(c.clearance.required, 0.0) + 10;
+  const double band_voxels = area * 2 * (band + 2 * h) / (h * h * h);
+  if (!(band_voxels <= OrientLimits::voxels))
+    throw InputError(where + "check.voxel: the distance check's band would hold " + count_text(band_voxels) + " voxels; at most " + count_text(OrientLimits::voxels));
+  return scene;
 }
 
 namespace {
@@ -209,7 +290,7 @@ machine::ClProgram cl_program(const std::vector<std::vector<machine::ClPose>>& p
 }  // namespace
 
 OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
-  const OrientScene& scene = c.scene;
+  const OrientScene scene = build_orient_scene(c);
   const ToolBody& tool = scene.tool;
   auto say = [&](const std::string& line) {
     if (!options.quiet) std::cout << line << std::endl;

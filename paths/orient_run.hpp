@@ -20,13 +20,22 @@
 
 #include <filesystem>
 #include <string>
+#include <variant>
 #include <vector>
 
 namespace drom::paths {
 
+// The [scene] table as read: which scene and its parameters. The scene itself (surfaces sampled,
+// passes placed for the case's tool) is built by build_orient_scene, after the read, so reading a case
+// stays cheap and its size is checked before anything is allocated.
+using SceneOptions = std::variant<BumpOptions, CornerOptions, ImpellerOptions, PanelOptions>;
+
 struct OrientCase {
   std::filesystem::path origin;
-  OrientScene scene;
+  SceneOptions scene;
+  std::vector<CheckPatch> extra_patches;  // [[check_surfaces]]: patches
+  TriangleSoup extra_mesh;                // [[check_surfaces]]: STL triangles
+  ToolBody tool;
   KhatibParameters khatib;
   Aggregation aggregation = Aggregation::F1;
   DynamicsSettings dynamics;
@@ -41,8 +50,24 @@ struct OrientCase {
   std::string resolved;            // the case after overrides
 };
 
+// Reads a case; InputError (file, line, key) for bad input, including a scene, tool skin or obstacle
+// mesh too large to hold (limits below).
 OrientCase load_orient_case(const std::filesystem::path& path, const std::vector<std::string>& overrides = {});
 OrientCase parse_orient_case(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides = {});
+
+// What a case may ask for: past these a machine of this size runs out of memory or time. Each is
+// several times what the shipped cases use.
+struct OrientLimits {
+  static constexpr double cl_points = 5e6;        // CL points in all passes (the full impeller: 1.3e5)
+  static constexpr double passes = 1e4;           // passes (the impeller: 427)
+  static constexpr double tool_nodes = 1e6;       // skin nodes on the shank and holder
+  static constexpr double obstacle_points = 2e7;  // check-surface points (the impeller at 2 mm: ~1.2e4)
+  static constexpr double voxels = 2e8;           // active voxels of the force field or of the distance check's band
+};
+
+// The scene the case asks for, its passes placed for the case's tool, with its extra check surfaces.
+// Throws InputError when the obstacle mesh or a voxel grid would exceed OrientLimits.
+OrientScene build_orient_scene(const OrientCase& c);
 
 struct OrientOptions {
   std::filesystem::path out = "out/orient";

@@ -95,6 +95,11 @@ FramedPath iso_pass(const geometry::NurbsSurface& surface, bool flip, double v, 
   return FramedPath::from_points(cl, normals, roll, pitch);
 }
 
+ToolBody default_tool(const BumpOptions&) { return ball_tool(5, 15, 5, 40, 16, 40); }
+ToolBody default_tool(const CornerOptions& o) { return ball_tool(3, 8, 3, o.stick_out, 8, 35); }
+ToolBody default_tool(const ImpellerOptions&) { return ball_tool(5, 15, 5, 45, 12, 40); }
+ToolBody default_tool(const PanelOptions&) { return ball_tool(5, 15, 5, 40, 16, 40); }
+
 OrientScene bump_scene(const BumpOptions& o) {
   // Table 4.5 (mm): i = 0..4 along u, j = 0..2 along v; control point (i, j) at index i * 3 + j.
   const double table[3][5][3] = {{{0, 0, 0}, {10, 0, 0}, {20, 0, 0}, {35, 0, 0}, {50, 0, 0}},
@@ -109,7 +114,7 @@ OrientScene bump_scene(const BumpOptions& o) {
   const geometry::NurbsSurface bump = geometry::NurbsSurface::bezier(5, 3, net);
   s.check_patches.push_back({"bump", bump, needs_flip(bump, Eigen::Vector3d::UnitY())});
   s.part_surfaces.push_back({"floor", quad({-30, -30, 0}, {80, -30, 0}, {-30, 60, 0}, {80, 60, 0}), false});
-  s.tool = ball_tool(5, 15, 5, 40, 16, 40);
+  s.tool = o.tool ? *o.tool : default_tool(o);
   const double z = s.tool.pivot_height();
   s.passes.push_back(FramedPath::from_points(polyline({{-20, o.lateral, z}, {70, o.lateral, z}}, 0.5),
                                              std::vector<Eigen::Vector3d>(static_cast<std::size_t>(181), Eigen::Vector3d::UnitZ()), 0, 0));
@@ -129,7 +134,7 @@ OrientScene corner_scene(const CornerOptions& o) {
   s.check_patches.push_back({"wall 2", quad({xc + w2, -45, -2}, {xc + w2, w1, -2}, {xc + w2, -45, h}, {xc + w2, w1, h}), false});
   s.check_patches.back().flip = needs_flip(s.check_patches.back().surface, -Eigen::Vector3d::UnitX());
   s.part_surfaces.push_back({"floor", quad({-10, -80, 0}, {xc + w2, -80, 0}, {-10, w1, 0}, {xc + w2, w1, 0}), false});
-  s.tool = ball_tool(3, 8, 3, o.stick_out, 8, 35);
+  s.tool = o.tool ? *o.tool : default_tool(o);
   const double z = s.tool.pivot_height();
   const auto cl = polyline({{0, 0, z}, {xc, 0, z}, {xc, -80, z}}, 0.5);
   s.passes.push_back(FramedPath::from_points(cl, std::vector<Eigen::Vector3d>(cl.size(), Eigen::Vector3d::UnitZ()), o.roll, 0));
@@ -173,6 +178,34 @@ geometry::NurbsSurface impeller_blade_side(const ImpellerOptions& o, int blade, 
       14, 5);
 }
 
+namespace {
+// CL points along the iso-line v of a hub patch at about `spacing` (its arc length on 64 chords), as a
+// double so that a hostile spacing is counted, not overflowed.
+double iso_line_points(const geometry::NurbsSurface& hub, double v, double spacing) {
+  double length = 0;
+  Eigen::Vector3d prev = hub.point(0, v);
+  for (int i = 1; i <= 64; ++i) {
+    const Eigen::Vector3d q = hub.point(i / 64.0, v);
+    length += (q - prev).norm();
+    prev = q;
+  }
+  return std::max(2.0, std::ceil(length / spacing) + 1);
+}
+}  // namespace
+
+std::size_t impeller_passes_per_vein(const ImpellerOptions& o) {
+  return static_cast<std::size_t>(std::llround(std::max(0.0, o.v_last - o.v_first) / o.v_step)) + 1;
+}
+
+double impeller_cl_points(const ImpellerOptions& o) {
+  const geometry::NurbsSurface hub = impeller_hub_patch(o, 0);
+  const std::size_t passes = impeller_passes_per_vein(o);
+  double per_vein = 0;
+  for (std::size_t p = 0; p < passes; ++p) per_vein += iso_line_points(hub, o.v_first + static_cast<double>(p) * o.v_step, o.point_spacing);
+  const int veins = o.veins < 0 ? o.blades : std::min(o.veins, o.blades);
+  return per_vein * veins;
+}
+
 OrientScene impeller_scene(const ImpellerOptions& o) {
   if (o.blades < 2) throw std::invalid_argument("an impeller needs at least two blades");
   const ImpellerShape sh{o};
@@ -190,24 +223,16 @@ OrientScene impeller_scene(const ImpellerOptions& o) {
       (void)r;
       s.check_patches.push_back({"blade " + std::to_string(k) + (side == 0 ? " pressure" : " suction"), std::move(b), flip});
     }
-  s.tool = ball_tool(5, 15, 5, 45, 12, 40);
+  s.tool = o.tool ? *o.tool : default_tool(o);
   const int veins = o.veins < 0 ? o.blades : std::min(o.veins, o.blades);
+  const int passes = static_cast<int>(impeller_passes_per_vein(o));
   for (int k = 0; k < veins; ++k) {
     const geometry::NurbsSurface hub = impeller_hub_patch(o, k);
     const bool flip = needs_flip(hub, Eigen::Vector3d::UnitZ());
     s.part_surfaces.push_back({"hub vein " + std::to_string(k), hub, flip});
-    const int passes = static_cast<int>(std::lround((o.v_last - o.v_first) / o.v_step)) + 1;
     for (int p = 0; p < passes; ++p) {
       const double v = o.v_first + p * o.v_step;
-      // Arc length of the iso-line, for the point count.
-      double length = 0;
-      Eigen::Vector3d prev = hub.point(0, v);
-      for (int i = 1; i <= 64; ++i) {
-        const Eigen::Vector3d q = hub.point(i / 64.0, v);
-        length += (q - prev).norm();
-        prev = q;
-      }
-      const int count = std::max(2, static_cast<int>(std::ceil(length / o.point_spacing)) + 1);
+      const int count = static_cast<int>(iso_line_points(hub, v, o.point_spacing));
       s.passes.push_back(iso_pass(hub, flip, v, 0, 1, count, s.tool.pivot_height(), 0, o.lead, o.lead_in));
       s.pass_names.push_back("vein " + std::to_string(k) + " v = " + std::to_string(v));
     }
@@ -250,7 +275,7 @@ OrientScene panel_scene(const PanelOptions& o) {
     geometry::NurbsSurface top = quad({xi, -10, zt}, {xo, -10, zt}, {xi, o.width + 10, zt}, {xo, o.width + 10, zt});
     s.check_patches.push_back({"clamp " + std::to_string(side) + " top", top, needs_flip(top, Eigen::Vector3d::UnitZ())});
   }
-  s.tool = ball_tool(5, 15, 5, 40, 16, 40);
+  s.tool = o.tool ? *o.tool : default_tool(o);
   const bool flip = s.part_surfaces.front().flip;
   for (double y = y0 + s.tool.cutter.radius + 1; y <= y1 - s.tool.cutter.radius - 1 + 1e-9; y += o.stepover) {
     const double v = (y - y0) / (y1 - y0);

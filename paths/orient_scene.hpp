@@ -13,6 +13,8 @@
 #include "paths/repulsive_field.hpp"
 #include "paths/tool_body.hpp"
 
+#include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -48,16 +50,22 @@ TriangleSoup scene_check_triangles(const OrientScene& scene, double step);
 FramedPath iso_pass(const geometry::NurbsSurface& surface, bool flip, double v, double u0, double u1, int count, double pivot_offset, double roll,
                     double pitch, double lead_in = 0);
 
+// Each scene is drawn for a tool: the passes are placed at its pivot (CL = S + R n for a ball). `tool`
+// replaces the scene's own (default_tool) when set, so a case's [tool] moves the CL points with it.
 struct BumpOptions {
   double lateral = 8;     // mm: the pass's distance in y from the bump's base line y = 0
   double spacing = 3;     // obstacle mesh (mm); the seed's 3 and 1 mm
+  std::optional<ToolBody> tool;
 };
+ToolBody default_tool(const BumpOptions& o);
 OrientScene bump_scene(const BumpOptions& o);
 
 struct CornerOptions {
   double stick_out = 20;  // the seed's 20 and 30 mm tools
   double roll = -0.3;     // θf,prog (rad)
+  std::optional<ToolBody> tool;
 };
+ToolBody default_tool(const CornerOptions& o);
 OrientScene corner_scene(const CornerOptions& o);
 
 struct ImpellerOptions {
@@ -73,8 +81,14 @@ struct ImpellerOptions {
   double point_spacing = 0.5;  // mm between CL points along a pass
   int veins = -1;            // -1: all
   double lead = 0.1745;      // rad of θt,prog (pitch along the feed): a ball does not cut on its tip
+  std::optional<ToolBody> tool;
 };
+ToolBody default_tool(const ImpellerOptions& o);
 OrientScene impeller_scene(const ImpellerOptions& o);
+// The scene's size before it is built (a case must not ask for a scene no machine holds): passes per
+// vein, and CL points in all (the veins are rotations of each other: one vein's passes are counted).
+std::size_t impeller_passes_per_vein(const ImpellerOptions& o);
+double impeller_cl_points(const ImpellerOptions& o);
 // The vein's hub patch, blade k's two sides (pressure, suction), as B-spline surfaces.
 geometry::NurbsSurface impeller_hub_patch(const ImpellerOptions& o, int vein);
 geometry::NurbsSurface impeller_blade_side(const ImpellerOptions& o, int blade, int side);
@@ -85,7 +99,9 @@ struct PanelOptions {
   double clamp_height = 50, clamp_reach = 70;  // clamp jaws on the faces x = 0 and x = length
   double stepover = 30;   // mm between passes on the floor
   double lead = 0.1745;   // rad
+  std::optional<ToolBody> tool;
 };
+ToolBody default_tool(const PanelOptions& o);
 OrientScene panel_scene(const PanelOptions& o);
 
 }  // namespace drom::paths

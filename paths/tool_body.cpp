@@ -49,24 +49,38 @@ void ToolBody::check() const {
   if (!holder.z.empty() && holder.z.front() != 0) throw InputError("tool.holder: the profile starts at the holder's face (height 0)");
 }
 
-std::vector<Eigen::Vector3d> tool_skin_nodes(const ToolBody& tool, int count, double spacing, unsigned seed) {
+namespace {
+
+// Skin pieces: each profile segment is a cone frustum (or an annulus where the height repeats), plus
+// the top disc (the flutes' end is inside the cutter: its disc is skipped).
+struct SkinPiece {
+  double z0, r0, z1, r1, area;
+};
+
+std::vector<SkinPiece> skin_pieces(const ToolBody& tool) {
   const RevolvedProfile p = tool.body_profile();
-  // Skin pieces: each profile segment is a cone frustum (or an annulus where the height repeats),
-  // plus the two end discs (the flutes' end is inside the cutter: its disc is skipped).
-  struct Piece {
-    double z0, r0, z1, r1, area;
-  };
-  std::vector<Piece> pieces;
-  double total = 0;
+  std::vector<SkinPiece> pieces;
   for (std::size_t k = 0; k + 1 < p.z.size(); ++k) {
     const double dz = p.z[k + 1] - p.z[k], dr = p.radius[k + 1] - p.radius[k];
-    const double area = std::numbers::pi * (p.radius[k] + p.radius[k + 1]) * std::hypot(dz, dr);
-    pieces.push_back({p.z[k], p.radius[k], p.z[k + 1], p.radius[k + 1], area});
-    total += area;
+    pieces.push_back({p.z[k], p.radius[k], p.z[k + 1], p.radius[k + 1], std::numbers::pi * (p.radius[k] + p.radius[k + 1]) * std::hypot(dz, dr)});
   }
-  const double top_area = std::numbers::pi * p.radius.back() * p.radius.back();
-  pieces.push_back({p.z.back(), p.radius.back(), p.z.back(), 0, top_area});
-  total += top_area;
+  pieces.push_back({p.z.back(), p.radius.back(), p.z.back(), 0, std::numbers::pi * p.radius.back() * p.radius.back()});
+  return pieces;
+}
+
+double total_area(const std::vector<SkinPiece>& pieces) {
+  double total = 0;
+  for (const auto& q : pieces) total += q.area;
+  return total;
+}
+
+}  // namespace
+
+double tool_skin_area(const ToolBody& tool) { return total_area(skin_pieces(tool)); }
+
+std::vector<Eigen::Vector3d> tool_skin_nodes(const ToolBody& tool, int count, double spacing, unsigned seed) {
+  const std::vector<SkinPiece> pieces = skin_pieces(tool);
+  const double total = total_area(pieces);
   const int n = count > 0 ? count : std::max(1, static_cast<int>(std::lround(total / (spacing * spacing))));
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0, 1);
@@ -77,7 +91,7 @@ std::vector<Eigen::Vector3d> tool_skin_nodes(const ToolBody& tool, int count, do
     double pick = unit(rng) * total;
     std::size_t k = 0;
     while (k + 1 < pieces.size() && pick > pieces[k].area) pick -= pieces[k++].area;
-    const Piece& q = pieces[k];
+    const SkinPiece& q = pieces[k];
     // Uniform by area on a frustum: the radius's square is uniform between the ends when the slant
     // is the parameter; sample t with density ∝ r(t).
     double t = unit(rng);

@@ -38,6 +38,8 @@ struct ToolBody {
 // area (the seed's 500), or, when `count` ≤ 0, one per `spacing`² of skin (the seed's ~1 mm skin).
 // Deterministic for a given seed.
 std::vector<Eigen::Vector3d> tool_skin_nodes(const ToolBody& tool, int count, double spacing, unsigned seed = 2014);
+// The shank+holder skin's area (mm²): what `spacing` divides into nodes.
+double tool_skin_area(const ToolBody& tool);
 
 // Signed distance from a local point to the cutting part's solid (negative inside): the ball, or the
 // torus with its flat bottom, up to the flute length (a cylinder of radius R above).

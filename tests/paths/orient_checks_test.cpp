@@ -120,5 +120,68 @@ points = [[30.0, -20.0, -5.0], [30.0, -20.0, 30.0], [30.0, 20.0, -5.0], [30.0, 2
   EXPECT_THROW(small_case("corner", {"model.unknown=1"}), InputError);
 }
 
+
+// A hostile case cannot ask for a scene no machine holds: each size is counted before anything is
+// built, and the error names the key (docs/robustness.md, finding 25).
+TEST(OrientBadInput, OversizedScenesAreRefusedBeforeTheyAreBuilt) {
+  const struct {
+    const char* scene;
+    std::vector<std::string> overrides;
+    const char* key;
+  } cases[] = {
+      {"impeller", {"scene.v_step=1e-300"}, "scene.v_step"},
+      {"impeller", {"scene.v_step=1e-5"}, "scene.v_step"},
+      {"impeller", {"scene.point_spacing=1e-250"}, "scene.point_spacing"},
+      {"impeller", {"scene.point_spacing=1e-4"}, "scene.point_spacing"},
+      {"panel", {"scene.stepover=1e-9"}, "scene.stepover"},
+      {"corner", {"tool.nodes=0", "tool.skin_spacing=1e-200"}, "tool.skin_spacing"},
+      {"corner", {"tool.nodes=0", "tool.skin_spacing=0.001"}, "tool.skin_spacing"},
+  };
+  for (const auto& c : cases) {
+    try {
+      small_case(c.scene, c.overrides);
+      ADD_FAILURE() << c.overrides.back() << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.key), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("at most"), std::string::npos) << e.what();
+    }
+  }
+  // Meshes and grids are counted when the scene is built, before they are allocated.
+  const struct {
+    std::vector<std::string> overrides;
+    const char* key;
+  } built[] = {
+      {{"model.obstacle_spacing=1e-6"}, "model.obstacle_spacing"},
+      {{"field.kind=\"voxel\"", "field.voxel=1e-3"}, "field.voxel"},
+      {{"check.voxel=1e-3"}, "check.voxel"},
+  };
+  for (const auto& c : built) {
+    const OrientCase oc = small_case("impeller", c.overrides);
+    try {
+      build_orient_scene(oc);
+      ADD_FAILURE() << c.overrides.back() << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.key), std::string::npos) << e.what();
+    }
+  }
+  // The shipped sizes pass: the full impeller is 427 passes.
+  const OrientScene full = build_orient_scene(small_case("impeller"));
+  EXPECT_EQ(full.passes.size(), 427u);
+}
+
+// The passes are placed for the case's tool: CL = S + R n moves with the ball's radius.
+TEST(OrientScenes, PassesFollowTheCasesTool) {
+  const OrientScene r5 = build_orient_scene(small_case("panel"));
+  const OrientScene r3 = build_orient_scene(small_case("panel", {"tool.radius=3"}));
+  ASSERT_EQ(r5.tool.cutter.radius, 5);
+  ASSERT_EQ(r3.tool.cutter.radius, 3);
+  const FramedPath& a = r5.passes.front();
+  const FramedPath& b = r3.passes.front();
+  const Eigen::Vector3d n = a.at(0.5 * a.length()).n;
+  // Same surface point under both: the CL points differ by (5 − 3) n.
+  const double along = (a.at(0.5 * a.length()).cl - b.at(0.5 * b.length()).cl).dot(n);
+  EXPECT_NEAR(along, 2.0, 0.05);
+}
+
 }  // namespace
 }  // namespace drom::paths

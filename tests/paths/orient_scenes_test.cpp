@@ -52,7 +52,10 @@ struct CornerRun {
 };
 
 CornerRun corner_run(double stick_out) {
-  const OrientScene scene = corner_scene({stick_out, -0.3});
+  CornerOptions o;
+  o.stick_out = stick_out;
+  o.roll = -0.3;
+  const OrientScene scene = corner_scene(o);
   const KhatibParameters k;
   const ObstacleCloud obstacles = scene_obstacles(scene, 2, k.influence_radius);
   const DirectField field(obstacles, k, Aggregation::F1);
