@@ -27,6 +27,7 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <sys/socket.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -37,8 +38,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <functional>
 #include <mutex>
+#include <optional>
 #include <sstream>
 
 namespace drom::geometry {
@@ -141,12 +142,12 @@ StepFace read_face_here(const std::filesystem::path& path, int index) {
   }
 }
 
-// ---- OpenCASCADE in a child process ----
+// ---- OpenCASCADE in a worker process ----
 // OpenCASCADE's STEP translator is not hardened against malformed files: the fuzzer found a file on
 // which it dereferences a null entity (StepGeom_CartesianPoint::NbCoordinates, 7.6.3). A crash there
-// must not take drom (and a night's closed loop) down with it, so the file is read in a forked child
-// that sends back drom's own types as bytes; a child that dies or hangs becomes an InputError naming
-// the file. The parent checks what it receives as it would any outside data.
+// must not take drom (and a night's closed loop) down with it, so the file is read in a worker
+// process that sends back drom's own types as bytes; a worker that dies or hangs becomes an
+// InputError naming the file. drom checks what it receives as it would any outside data.
 
 // Bounds on what one face may hold: far above any CAD face, low enough that a damaged answer
 // cannot ask for gigabytes.
@@ -216,49 +217,80 @@ StepFace decode(std::string_view bytes, const std::string& origin, int index) {
   return face;
 }
 
-void write_all(int fd, const std::string& bytes) {
+// ---- The translator process ----
+// OpenCASCADE runs in one worker process, forked at the first read and kept: each read is a request
+// on a socket (kind, face index, path) and an answer ('F' and drom's bytes, or 'E' and a message). A
+// fork per read cost most of a read (the parent's page tables copied, every page the translator
+// touches copied again, its symbols bound anew: 15 reads a second under the sanitizers); a kept
+// worker pays that once. A worker that crashes or hangs is ended, the read is an InputError naming
+// the file, and the next read starts a new worker. The worker is also renewed every kRenewAfter
+// reads, so that what OpenCASCADE keeps allocated between reads stays bounded.
+
+constexpr int kRenewAfter = 1000;
+
+bool send_all(int fd, std::string_view bytes) {
   for (std::size_t done = 0; done < bytes.size();) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    const ssize_t n = ::send(fd, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return;
+    if (n <= 0) return false;
     done += static_cast<std::size_t>(n);
   }
+  return true;
 }
 
-// The STEP translator's static tables (the AP203/AP214 schema's entity types, its parameters) are
-// built once, in drom's own process, so that every child inherits them and starts reading at once
-// instead of building them again: with them built here a small file is read in a fraction of the time.
-// Building them reads no file; only the translation of a file runs in the child.
-void prepare_translator() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    Message::DefaultMessenger()->ChangePrinters().Clear();
-    STEPControl_Reader warm;
-  });
-}
-
-// `work` run in a child process: its answer's bytes, or its InputError rethrown here. A child that
-// crashes, stops without an answer or outlives `limit` is an InputError naming the file.
-std::string in_child_process(const std::filesystem::path& path, const std::function<std::string()>& work, std::chrono::seconds limit) {
-  const std::string origin = path.string();
-  prepare_translator();
-  int pipe_fds[2];
-  if (::pipe2(pipe_fds, O_CLOEXEC) != 0) throw InputError(origin + ": cannot start OpenCASCADE's reader: " + std::strerror(errno));
-  std::fflush(nullptr);
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    ::close(pipe_fds[0]), ::close(pipe_fds[1]);
-    throw InputError(origin + ": cannot start OpenCASCADE's reader: " + std::strerror(errno));
+// Reads exactly `size` bytes, waiting until `deadline` (none: forever). Returns false at the end of
+// the stream or an error; sets `timed_out` when the deadline passed.
+bool receive_exactly(int fd, char* out, std::size_t size, std::optional<std::chrono::steady_clock::time_point> deadline, bool& timed_out) {
+  timed_out = false;
+  for (std::size_t done = 0; done < size;) {
+    int wait_ms = -1;
+    if (deadline) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(*deadline - std::chrono::steady_clock::now()).count();
+      if (left <= 0) {
+        timed_out = true;
+        return false;
+      }
+      wait_ms = static_cast<int>(std::min<long long>(left, 1000));
+    }
+    pollfd p{fd, POLLIN, 0};
+    const int ready = ::poll(&p, 1, wait_ms);
+    if (ready < 0 && errno != EINTR) return false;
+    if (ready <= 0) continue;
+    const ssize_t n = ::recv(fd, out + done, size - done, 0);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    done += static_cast<std::size_t>(n);
   }
-  if (pid == 0) {
-    // The child dies of its own crash: no handler inherited from the parent (a fuzzer's, a
-    // sanitizer's) may report it as the parent's.
-    for (const int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) ::signal(sig, SIG_DFL);
-    ::close(pipe_fds[0]);
+  return true;
+}
+
+std::string frame(char kind, std::string_view payload) {
+  std::string out(1, kind);
+  const std::uint64_t n = payload.size();
+  out.append(reinterpret_cast<const char*>(&n), sizeof n);
+  out.append(payload);
+  return out;
+}
+
+// The worker's loop: a request is 'C' (count) or 'R' (read), a 32-bit face index, then the path framed.
+[[noreturn]] void serve(int fd) {
+  for (;;) {
+    bool timed_out = false;
+    char head[1 + sizeof(std::int32_t) + sizeof(std::uint64_t)];
+    if (!receive_exactly(fd, head, sizeof head, std::nullopt, timed_out)) ::_exit(0);  // drom closed its end
+    std::int32_t index = 0;
+    std::uint64_t length = 0;
+    std::memcpy(&index, head + 1, sizeof index);
+    std::memcpy(&length, head + 1 + sizeof index, sizeof length);
+    if (length > 1 << 20) ::_exit(1);
+    std::string path_text(length, '\0');
+    if (!receive_exactly(fd, path_text.data(), length, std::nullopt, timed_out)) ::_exit(0);
+    const std::filesystem::path path(path_text);
+    const std::string origin = path.string();
     char kind = 'F';
     std::string answer;
     try {
-      answer = work();
+      answer = head[0] == 'C' ? std::to_string(count_faces_here(path)) : encode(read_face_here(path, index));
     } catch (const InputError& e) {
       kind = 'E', answer = e.what();
     } catch (const Standard_Failure& e) {
@@ -268,41 +300,99 @@ std::string in_child_process(const std::filesystem::path& path, const std::funct
     } catch (...) {
       kind = 'E', answer = origin + ": OpenCASCADE's reader failed";
     }
-    write_all(pipe_fds[1], std::string(1, kind) + answer);
-    ::_exit(0);
+    if (!send_all(fd, frame(kind, answer))) ::_exit(0);
   }
-  ::close(pipe_fds[1]);
-  std::string bytes;
-  const auto deadline = std::chrono::steady_clock::now() + limit;
-  bool timed_out = false;
-  for (char buffer[65536];;) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now()).count();
-    if (left <= 0) {
-      timed_out = true;
-      break;
+}
+
+class TranslatorProcess {
+ public:
+  // The answer's payload, or its InputError rethrown here; a worker that crashes, stops without an
+  // answer or outlives `limit` is an InputError naming the file.
+  std::string ask(char kind, const std::filesystem::path& path, int index, std::chrono::seconds limit) {
+    const std::lock_guard lock(mutex_);
+    const std::string origin = path.string();
+    if (pid_ > 0 && owner_ != ::getpid()) pid_ = -1, ::close(fd_);  // a forked copy of drom: the worker is its parent's
+    if (pid_ > 0 && served_ >= kRenewAfter) stop();
+    if (pid_ <= 0) start(origin);
+    ++served_;
+    std::string request(1, kind);
+    const auto index32 = static_cast<std::int32_t>(index);
+    request.append(reinterpret_cast<const char*>(&index32), sizeof index32);
+    request += frame('P', path.string()).substr(1);
+    bool timed_out = false;
+    char head[1 + sizeof(std::uint64_t)];
+    const auto deadline = std::chrono::steady_clock::now() + limit;
+    std::string payload;
+    bool answered = send_all(fd_, request) && receive_exactly(fd_, head, sizeof head, deadline, timed_out);
+    if (answered) {
+      std::uint64_t length = 0;
+      std::memcpy(&length, head + 1, sizeof length);
+      answered = (head[0] == 'F' || head[0] == 'E') && length <= (std::uint64_t{1} << 34);
+      if (answered) {
+        payload.resize(length);
+        answered = receive_exactly(fd_, payload.data(), length, deadline, timed_out);
+      }
     }
-    pollfd p{pipe_fds[0], POLLIN, 0};
-    const int ready = ::poll(&p, 1, static_cast<int>(std::min<long long>(left, 1000)));
-    if (ready < 0 && errno != EINTR) break;
-    if (ready <= 0) continue;
-    const ssize_t n = ::read(pipe_fds[0], buffer, sizeof buffer);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;
-    bytes.append(buffer, static_cast<std::size_t>(n));
-  }
-  ::close(pipe_fds[0]);
-  if (timed_out) ::kill(pid, SIGKILL);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  if (timed_out) throw InputError(origin + ": OpenCASCADE did not finish reading it within " + std::to_string(limit.count()) + " s");
-  if (WIFSIGNALED(status))
-    throw InputError(origin + ": OpenCASCADE crashed reading it (" + strsignal(WTERMSIG(status)) +
-                     "): the file is malformed, or holds an entity OpenCASCADE 7.6 cannot translate");
-  if (bytes.empty() || (bytes[0] != 'F' && bytes[0] != 'E'))
+    if (answered) {
+      if (head[0] == 'E') throw InputError(payload);
+      return payload;
+    }
+    // No answer: the worker hung, crashed, or sent something no worker sends. It is ended either way.
+    const int status = stop();
+    if (timed_out) throw InputError(origin + ": OpenCASCADE did not finish reading it within " + std::to_string(limit.count()) + " s");
+    if (WIFSIGNALED(status) && WTERMSIG(status) != SIGKILL)
+      throw InputError(origin + ": OpenCASCADE crashed reading it (" + strsignal(WTERMSIG(status)) +
+                       "): the file is malformed, or holds an entity OpenCASCADE 7.6 cannot translate");
     throw InputError(origin + ": OpenCASCADE's reader stopped without an answer (exit status " + std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + ")");
-  if (bytes[0] == 'E') throw InputError(bytes.substr(1));
-  return bytes.substr(1);
+  }
+
+  ~TranslatorProcess() {
+    if (pid_ > 0 && owner_ == ::getpid()) stop();
+  }
+
+ private:
+  void start(const std::string& origin) {
+    int fds[2];
+    if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, fds) != 0) throw InputError(origin + ": cannot start OpenCASCADE's reader: " + std::strerror(errno));
+    std::fflush(nullptr);
+    const pid_t pid = ::fork();
+    if (pid < 0) {
+      ::close(fds[0]), ::close(fds[1]);
+      throw InputError(origin + ": cannot start OpenCASCADE's reader: " + std::strerror(errno));
+    }
+    if (pid == 0) {
+      // The worker dies of its own crash: no handler inherited from drom (a fuzzer's, a sanitizer's)
+      // may report it as drom's.
+      for (const int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) ::signal(sig, SIG_DFL);
+      ::close(fds[0]);
+      Message::DefaultMessenger()->ChangePrinters().Clear();
+      serve(fds[1]);
+    }
+    ::close(fds[1]);
+    pid_ = pid, fd_ = fds[0], served_ = 0, owner_ = ::getpid();
+  }
+
+  // Ends the worker and returns its status. Killed, not asked: it holds nothing of value between
+  // reads, and a copy of drom's socket in another forked process would keep it waiting.
+  int stop() {
+    ::kill(pid_, SIGKILL);
+    ::close(fd_);
+    int status = 0;
+    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+    }
+    pid_ = -1, fd_ = -1;
+    return status;
+  }
+
+  std::mutex mutex_;
+  pid_t pid_ = -1, owner_ = -1;
+  int fd_ = -1;
+  int served_ = 0;
+};
+
+TranslatorProcess& translator() {
+  static TranslatorProcess process;
+  return process;
 }
 
 // A large assembly takes OpenCASCADE a minute or two; ten is a reader stuck.
@@ -312,7 +402,7 @@ constexpr std::chrono::seconds kReadLimit{600};
 
 int count_step_faces(const std::filesystem::path& path) {
   if (!std::filesystem::is_regular_file(path)) throw InputError(path.string() + ": no such STEP file");
-  const std::string answer = in_child_process(path, [&] { return std::to_string(count_faces_here(path)); }, kReadLimit);
+  const std::string answer = translator().ask('C', path, 0, kReadLimit);
   int faces = 0;
   std::istringstream in(answer);
   if (!(in >> faces) || faces < 1) throw InputError(path.string() + ": OpenCASCADE's reader sent no face count");
@@ -321,7 +411,7 @@ int count_step_faces(const std::filesystem::path& path) {
 
 StepFace read_step_face(const std::filesystem::path& path, int index) {
   if (!std::filesystem::is_regular_file(path)) throw InputError(path.string() + ": no such STEP file");
-  return decode(in_child_process(path, [&] { return encode(read_face_here(path, index)); }, kReadLimit), path.string(), index);
+  return decode(translator().ask('R', path, index, kReadLimit), path.string(), index);
 }
 
 }  // namespace drom::geometry

@@ -175,6 +175,11 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
   c.clearance.required = r.real("check.required", Range::closed(-1e3, 1e3), c.clearance.required);
   c.clearance.gouge_spacing = r.real("check.gouge_spacing", Range::positive(), c.clearance.gouge_spacing);
   c.machine = r.text("machine.definition", c.machine);
+  if (r.has("machine.part_origin")) {
+    const auto o = r.reals("machine.part_origin", Range::closed(-1e4, 1e4));
+    if (o.size() != 3) r.fail("machine.part_origin", "expected [x, y, z] in mm: where the scene's origin sits in the machine's table frame");
+    c.part_origin = Eigen::Vector3d(o[0], o[1], o[2]);
+  }
   // The extra check surfaces' meshes, counted now (the scene's own surfaces are checked when built).
   const double extra_area = check_area(c.extra_patches, c.extra_mesh);
   if (!(extra_area / (c.obstacle_spacing * c.obstacle_spacing) <= OrientLimits::obstacle_points))
@@ -296,7 +301,12 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
     if (!options.quiet) std::cout << line << std::endl;
   };
   // The machine first: a tool longer than the Z stroke cannot be mounted.
-  machine::Machine m = machine::load_machine(c.machine, {"setup.tool_length=" + std::to_string(tool.length())});
+  const Eigen::Vector3d origin = c.part_origin.value_or(scene.part_origin);
+  std::ostringstream setup_origin;
+  setup_origin << std::fixed;
+  setup_origin.precision(9);
+  setup_origin << "setup.part_origin=[" << origin.x() << ", " << origin.y() << ", " << origin.z() << "]";
+  machine::Machine m = machine::load_machine(c.machine, {"setup.tool_length=" + std::to_string(tool.length()), setup_origin.str()});
   {
     const int z = m.joint_of('Z');
     if (z >= 0 && tool.length() >= m.axes[z].max - m.axes[z].min)
@@ -453,6 +463,7 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
     machine_json["max_ratio_to_limit_programmed"][names[d]] = ratio_before[d];
   }
   machine_json["name"] = m.name;
+  machine_json["part_origin_mm"] = {origin.x(), origin.y(), origin.z()};
   machine_json["cycle_time_programmed_s"] = cycle_before;
   machine_json["cycle_time_after_s"] = cycle_after;
   j["machine"] = machine_json;

@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -46,6 +47,7 @@ struct OrientCase {
   VoxelFieldSettings voxel_settings;
   ClearanceSettings clearance;
   std::string machine = "ucp710_like";
+  std::optional<Eigen::Vector3d> part_origin;  // machine.part_origin: the scene's own when unset
   bool model_on = true;            // false: the programmed axis only (what the clearance check flags)
   std::string resolved;            // the case after overrides
 };
@@ -58,10 +60,10 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
 // What a case may ask for: past these a machine of this size runs out of memory or time. Each is
 // several times what the shipped cases use.
 struct OrientLimits {
-  static constexpr double cl_points = 5e6;        // CL points in all passes (the full impeller: 1.3e5)
+  static constexpr double cl_points = 5e6;        // CL points in all passes (the full impeller: about 1e5)
   static constexpr double passes = 1e4;           // passes (the impeller: 427)
   static constexpr double tool_nodes = 1e6;       // skin nodes on the shank and holder
-  static constexpr double obstacle_points = 2e7;  // check-surface points (the impeller at 2 mm: ~1.2e4)
+  static constexpr double obstacle_points = 2e7;  // check-surface points (the impeller at 2 mm: 1.1e4)
   static constexpr double voxels = 2e8;           // active voxels of the force field or of the distance check's band
 };
 

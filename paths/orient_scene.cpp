@@ -276,6 +276,8 @@ OrientScene panel_scene(const PanelOptions& o) {
     s.check_patches.push_back({"clamp " + std::to_string(side) + " top", top, needs_flip(top, Eigen::Vector3d::UnitZ())});
   }
   s.tool = o.tool ? *o.tool : default_tool(o);
+  // Centred on C, its lowest edge (the bottom face at x = 0 and x = length) standing on the table.
+  s.part_origin = Eigen::Vector3d(-o.length / 2, -o.width / 2, o.thickness - top_z(0));
   const bool flip = s.part_surfaces.front().flip;
   for (double y = y0 + s.tool.cutter.radius + 1; y <= y1 - s.tool.cutter.radius - 1 + 1e-9; y += o.stepover) {
     const double v = (y - y0) / (y1 - y0);

@@ -34,6 +34,9 @@ struct OrientScene {
   std::vector<FramedPath> passes;                        // CL = the tool's pivot
   std::vector<std::string> pass_names;
   ToolBody tool;
+  // Where the scene's frame sits on the machine's table (machine/'s setup.part_origin: table point =
+  // scene point + part_origin): the scenes are mounted as a setter would, the panel centred on C.
+  Eigen::Vector3d part_origin = Eigen::Vector3d::Zero();
 };
 
 // The check surfaces as point obstacles at `spacing` (binned at cell `cell`, the influence radius).

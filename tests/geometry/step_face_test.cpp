@@ -21,6 +21,9 @@
 #include <gp_Pln.hxx>
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -132,6 +135,30 @@ TEST(StepFace, AFileThatCrashesOpenCascadeIsAClearErrorAndDromLivesOn) {
   const fs::path sound = scratch("sound.step");
   write_step(bezier_face(drom::tests::rubio_surface()), sound);
   EXPECT_EQ(drom::geometry::count_step_faces(sound), 1);
+}
+
+// OpenCASCADE runs in one kept worker process (geometry/step_face.cpp): reads in a row, crashes
+// between them, and a forked copy of drom each get their own answers.
+TEST(StepFace, TheKeptTranslatorServesReadsInARowAcrossCrashesAndForks) {
+  const fs::path sound = scratch("row.step");
+  write_step(bezier_face(drom::tests::rubio_surface()), sound);
+  const fs::path garbage = scratch("row_garbage.step");
+  std::ofstream(garbage) << "ISO-10303-21;\nnothing here\n";
+  for (int round = 0; round < 3; ++round) {
+    for (int k = 0; k < 20; ++k) {
+      EXPECT_EQ(drom::geometry::count_step_faces(sound), 1);
+      EXPECT_EQ(error(garbage, 1), garbage.string() + ": not a readable STEP file");
+    }
+    const auto face = drom::geometry::read_step_face(sound, 1);
+    EXPECT_LT((face.surface.point(0.5, 0.5) - drom::tests::rubio_surface().point(0.5, 0.5)).norm(), 1e-9);
+    // A forked copy of this process reads with a worker of its own, and leaves this one's alone.
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) ::_exit(drom::geometry::count_step_faces(sound) == 1 ? 0 : 1);
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  }
 }
 
 }  // namespace
