@@ -38,6 +38,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <mutex>
 #include <optional>
 #include <sstream>
@@ -46,9 +47,24 @@ namespace drom::geometry {
 
 namespace {
 
-// The file's faces, each once, in OpenCASCADE's exploration order.
-TopTools_IndexedMapOfShape load_faces(const std::filesystem::path& path) {
+std::string file_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
+}
+
+// The file's faces, each once, in OpenCASCADE's exploration order. The worker keeps the last file's
+// faces: a case that takes several faces of one part (check surfaces, a face count then a face) has
+// the file translated once, not once a face (a large assembly takes a minute or two). The cache is
+// keyed by the path and the file's whole content, read before and after the translation.
+const TopTools_IndexedMapOfShape& load_faces(const std::filesystem::path& path) {
+  static std::string cached_path, cached_bytes;
+  static TopTools_IndexedMapOfShape cached_faces;
   if (!std::filesystem::is_regular_file(path)) throw InputError(path.string() + ": no such STEP file");
+  std::string bytes = file_bytes(path);
+  if (path.string() == cached_path && bytes == cached_bytes) return cached_faces;
+  cached_path.clear(), cached_bytes.clear(), cached_faces.Clear();
   // OpenCASCADE reports its progress on stdout; drom's commands own stdout.
   Message::DefaultMessenger()->ChangePrinters().Clear();
   STEPControl_Reader reader;
@@ -57,7 +73,9 @@ TopTools_IndexedMapOfShape load_faces(const std::filesystem::path& path) {
   TopTools_IndexedMapOfShape faces;
   TopExp::MapShapes(reader.OneShape(), TopAbs_FACE, faces);
   if (faces.Extent() == 0) throw InputError(path.string() + ": the STEP file holds no face");
-  return faces;
+  cached_faces = faces;
+  if (file_bytes(path) == bytes) cached_path = path.string(), cached_bytes = std::move(bytes);
+  return cached_faces;
 }
 
 // The face's wires as polygons in its parameter space, edges sampled along their p-curves.
@@ -101,7 +119,7 @@ int count_faces_here(const std::filesystem::path& path) {
 
 StepFace read_face_here(const std::filesystem::path& path, int index) {
   try {
-    const TopTools_IndexedMapOfShape faces = load_faces(path);
+    const TopTools_IndexedMapOfShape& faces = load_faces(path);
     if (index < 1 || index > faces.Extent())
       throw InputError(path.string() + ": face " + std::to_string(index) + " asked for, but the file holds " + std::to_string(faces.Extent()) + " face" +
                        (faces.Extent() == 1 ? "" : "s") + " (1-based)");

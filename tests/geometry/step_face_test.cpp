@@ -159,6 +159,10 @@ TEST(StepFace, TheKeptTranslatorServesReadsInARowAcrossCrashesAndForks) {
     ASSERT_EQ(::waitpid(child, &status, 0), child);
     EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
   }
+  // The worker keeps the last file's faces: the same path written anew is translated anew.
+  write_step(bezier_face(drom::tests::choi_surface()), sound);
+  const auto choi = drom::geometry::read_step_face(sound, 1);
+  EXPECT_LT((choi.surface.point(0.3, 0.7) - drom::tests::choi_surface().point(0.3, 0.7)).norm(), 1e-9);
 }
 
 }  // namespace
