@@ -12,6 +12,8 @@
 #include <Geom_RectangularTrimmedSurface.hxx>
 #include <Geom_Surface.hxx>
 #include <IFSelect_ReturnStatus.hxx>
+#include <Interface_Check.hxx>
+#include <Interface_CheckIterator.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
 #include <STEPControl_Reader.hxx>
@@ -24,6 +26,7 @@
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Wire.hxx>
+#include <XSControl_WorkSession.hxx>
 
 #include <fcntl.h>
 #include <poll.h>
@@ -54,6 +57,27 @@ std::string file_bytes(const std::filesystem::path& path) {
   return bytes.str();
 }
 
+// A file whose entities OpenCASCADE could not read (a syntax error, a reference to an entity that is
+// not there or of the wrong type) is refused before anything is translated, with OpenCASCADE's
+// words and the file's line: translating the rest is how OpenCASCADE 7.6 reached a null point and
+// crashed (finding 14), and a shape with a hole where an entity failed is no face to machine.
+void refuse_failed_checks(STEPControl_Reader& reader, const std::filesystem::path& path) {
+  Interface_CheckIterator checks = reader.WS()->ModelCheckList();
+  std::string first;
+  int failed = 0;
+  for (checks.Start(); checks.More(); checks.Next()) {
+    const Handle(Interface_Check)& check = checks.Value();
+    if (!check->HasFailed()) continue;
+    failed += check->NbFails();
+    if (first.empty()) {
+      first = check->CFail(1);
+      if (checks.Number() > 0) first = "entity #" + std::to_string(checks.Number()) + ": " + first;
+    }
+  }
+  if (failed > 0)
+    throw InputError(path.string() + ": a malformed STEP file: " + first + (failed > 1 ? " (and " + std::to_string(failed - 1) + " more)" : ""));
+}
+
 // The file's faces, each once, in OpenCASCADE's exploration order. The worker keeps the last file's
 // faces: a case that takes several faces of one part (check surfaces, a face count then a face) has
 // the file translated once, not once a face (a large assembly takes a minute or two). The cache is
@@ -69,6 +93,7 @@ const TopTools_IndexedMapOfShape& load_faces(const std::filesystem::path& path) 
   Message::DefaultMessenger()->ChangePrinters().Clear();
   STEPControl_Reader reader;
   if (reader.ReadFile(path.string().c_str()) != IFSelect_RetDone) throw InputError(path.string() + ": not a readable STEP file");
+  refuse_failed_checks(reader, path);
   reader.TransferRoots();
   TopTools_IndexedMapOfShape faces;
   TopExp::MapShapes(reader.OneShape(), TopAbs_FACE, faces);

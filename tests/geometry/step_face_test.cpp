@@ -24,6 +24,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -111,17 +112,21 @@ TEST(StepFace, ErrorsNameTheFile) {
   EXPECT_EQ(error(one, 2), one.string() + ": face 2 asked for, but the file holds 1 face (1-based)");
 }
 
-// Fuzz finding (docs/robustness.md): a vertex whose point entity has a damaged type name makes
-// OpenCASCADE 7.6.3 dereference a null point (StepGeom_CartesianPoint::NbCoordinates, SIGSEGV).
-// The file is read in a child process, so drom reports it and lives on.
-TEST(StepFace, AFileThatCrashesOpenCascadeIsAClearErrorAndDromLivesOn) {
-  const fs::path file = scratch("damaged_vertex.step");
-  write_step(bezier_face(drom::tests::rubio_surface()), file);
+std::string text_of(const fs::path& file) {
   std::ifstream in(file);
   std::stringstream text;
   text << in.rdbuf();
-  std::string step = text.str();
-  in.close();
+  return text.str();
+}
+
+// Fuzz finding 14 (docs/robustness.md): a vertex whose point entity has a damaged type name made
+// OpenCASCADE 7.6.3 dereference a null point (StepGeom_CartesianPoint::NbCoordinates, SIGSEGV) while
+// translating. A file whose entities OpenCASCADE could not read is now refused before any translation,
+// naming the line.
+TEST(StepFace, AFileWithEntitiesOpenCascadeCouldNotReadIsRefusedNamingTheLine) {
+  const fs::path file = scratch("damaged_vertex.step");
+  write_step(bezier_face(drom::tests::rubio_surface()), file);
+  std::string step = text_of(file);
   const std::string vertex = "VERTEX_POINT('',";
   const auto at = step.find(vertex);
   ASSERT_NE(at, std::string::npos);
@@ -129,6 +134,29 @@ TEST(StepFace, AFileThatCrashesOpenCascadeIsAClearErrorAndDromLivesOn) {
   const auto where = step.find(point);
   ASSERT_NE(where, std::string::npos) << point;
   step.replace(where, point.size(), point.substr(0, point.size() - 15) + "CARTESI[N_POINT");
+  const auto line = 1 + std::count(step.begin(), step.begin() + static_cast<std::ptrdiff_t>(where), '\n');
+  std::ofstream(file) << step;
+  const std::string e = error(file, 1), head = file.string() + ": a malformed STEP file: Undefined Parsing: Line ";
+  ASSERT_EQ(e.rfind(head, 0), 0u) << e;
+  // OpenCASCADE's lexer names the line where it met the unexpected token: the damaged one or the next.
+  const long named = std::stol(e.substr(head.size()));
+  EXPECT_TRUE(named == line || named == line + 1) << e << " (damaged line " << line << ")";
+  EXPECT_NE(e.find("Incorrect syntax"), std::string::npos) << e;
+}
+
+// Found by the fuzzer past that check: an oriented edge that is its own edge sends OpenCASCADE 7.6.3
+// into an endless recursion (SIGSEGV). It runs in a worker process, so drom reports it and lives on.
+TEST(StepFace, AFileThatCrashesOpenCascadeIsAClearErrorAndDromLivesOn) {
+  const fs::path file = scratch("own_edge.step");
+  write_step(bezier_face(drom::tests::rubio_surface()), file);
+  std::string step = text_of(file);
+  const std::string edge = " = ORIENTED_EDGE('',*,*,#";
+  const auto at = step.find(edge);
+  ASSERT_NE(at, std::string::npos);
+  const auto id_start = step.rfind('#', at);
+  const std::string self = step.substr(id_start, at - id_start);
+  const auto ref_end = step.find(',', at + edge.size());
+  step.replace(at + edge.size() - 1, ref_end - (at + edge.size() - 1), self);
   std::ofstream(file) << step;
   EXPECT_EQ(error(file, 1).rfind(file.string() + ": OpenCASCADE crashed reading it (Segmentation fault)", 0), 0u) << error(file, 1);
   // The process still reads a sound file afterwards.
