@@ -1,6 +1,7 @@
 #include "levelset/closed_surface.hpp"
 
 #include "support/input_error.hpp"
+#include "support/stl_reader.hpp"
 
 #include <algorithm>
 #include <array>
@@ -13,73 +14,8 @@
 
 namespace drom::levelset {
 
-namespace {
-
-std::vector<std::array<Eigen::Vector3d, 3>> read_stl_triangles(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path.string() + ": cannot open STL file");
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::vector<std::array<Eigen::Vector3d, 3>> triangles;
-
-  auto binary_size_matches = [&] {
-    if (bytes.size() < 84) return false;
-    std::uint32_t n = 0;
-    std::memcpy(&n, bytes.data() + 80, 4);
-    return bytes.size() == 84 + 50ull * n;
-  };
-  if (binary_size_matches()) {
-    std::uint32_t n = 0;
-    std::memcpy(&n, bytes.data() + 80, 4);
-    for (std::uint32_t t = 0; t < n; ++t) {
-      const char* rec = bytes.data() + 84 + 50ull * t + 12;  // skip the normal
-      std::array<Eigen::Vector3d, 3> tri;
-      for (int v = 0; v < 3; ++v) {
-        float xyz[3];
-        std::memcpy(xyz, rec + 12 * v, 12);
-        tri[static_cast<std::size_t>(v)] = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
-        if (!tri[static_cast<std::size_t>(v)].allFinite())
-          throw InputError(path.string() + ": facet " + std::to_string(t + 1) + " has a non-finite vertex");
-      }
-      triangles.push_back(tri);
-    }
-    return triangles;
-  }
-
-  std::istringstream text(bytes);
-  std::string line, word;
-  int line_no = 0, vertex_in_facet = 0;
-  bool seen_solid = false;
-  std::array<Eigen::Vector3d, 3> tri;
-  while (std::getline(text, line)) {
-    ++line_no;
-    std::istringstream ls(line);
-    if (!(ls >> word)) continue;
-    const std::string where = path.string() + ":" + std::to_string(line_no) + ": ";
-    if (word == "solid") {
-      seen_solid = true;
-    } else if (word == "facet") {
-      vertex_in_facet = 0;
-    } else if (word == "vertex") {
-      double x, y, z;
-      if (!(ls >> x >> y >> z) || !std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
-        throw InputError(where + "expected 'vertex x y z' with three finite numbers");
-      if (vertex_in_facet >= 3) throw InputError(where + "facet has more than three vertices");
-      tri[static_cast<std::size_t>(vertex_in_facet++)] = Eigen::Vector3d(x, y, z);
-    } else if (word == "endfacet") {
-      if (vertex_in_facet != 3) throw InputError(where + "facet has " + std::to_string(vertex_in_facet) + " vertices, expected 3");
-      triangles.push_back(tri);
-    } else if (word != "outer" && word != "endloop" && word != "endsolid") {
-      throw InputError(where + "unexpected '" + word + "' (expected an ASCII STL keyword)");
-    }
-  }
-  if (!seen_solid) throw InputError(path.string() + ": neither a binary STL (size mismatch) nor an ASCII one ('solid' missing)");
-  return triangles;
-}
-
-}  // namespace
-
 Plc read_closed_stl(const std::filesystem::path& path) {
-  const auto triangles = read_stl_triangles(path);
+  const auto triangles = read_stl_facets(path);
   if (triangles.size() < 4) throw InputError(path.string() + ": a closed surface needs at least 4 triangles, found " + std::to_string(triangles.size()));
 
   Eigen::Vector3d lo = triangles[0][0], hi = lo;

@@ -3,6 +3,7 @@
 #include "geometry/local_geometry.hpp"
 #include "geometry/surface_grid.hpp"
 #include "support/input_error.hpp"
+#include "support/stl_reader.hpp"
 
 #include <Eigen/Geometry>
 
@@ -174,47 +175,11 @@ FieldSample repulsive_force(const ObstacleCloud& obstacles, const Eigen::Vector3
 }
 
 TriangleSoup read_stl_triangles(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path.string() + ": cannot open the STL file");
-  std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   TriangleSoup soup;
-  auto add = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, std::size_t where) {
-    for (const auto& v : {a, b, c})
-      if (!v.allFinite()) throw InputError(path.string() + ": facet " + std::to_string(where) + " has a non-finite vertex");
+  for (const StlFacet& f : read_stl_facets(path)) {
     const int base = static_cast<int>(soup.vertices.size());
-    soup.vertices.insert(soup.vertices.end(), {a, b, c});
+    soup.vertices.insert(soup.vertices.end(), f.begin(), f.end());
     soup.triangles.push_back({base, base + 1, base + 2});
-  };
-  const bool ascii = data.rfind("solid", 0) == 0 && data.find("facet") != std::string::npos;
-  if (ascii) {
-    std::istringstream text(data);
-    std::string word;
-    std::vector<Eigen::Vector3d> corners;
-    std::size_t facet = 0;
-    while (text >> word) {
-      if (word == "facet") ++facet;
-      if (word != "vertex") continue;
-      Eigen::Vector3d v;
-      if (!(text >> v.x() >> v.y() >> v.z())) throw InputError(path.string() + ": facet " + std::to_string(facet) + ": a vertex needs three numbers");
-      corners.push_back(v);
-      if (corners.size() == 3) {
-        add(corners[0], corners[1], corners[2], facet);
-        corners.clear();
-      }
-    }
-    if (!corners.empty()) throw InputError(path.string() + ": the last facet has " + std::to_string(corners.size()) + " vertices, not 3");
-  } else {
-    if (data.size() < 84) throw InputError(path.string() + ": too short for a binary STL (84-byte header)");
-    std::uint32_t count = 0;
-    std::memcpy(&count, data.data() + 80, 4);
-    if (data.size() < 84 + 50ull * count)
-      throw InputError(path.string() + ": binary STL announces " + std::to_string(count) + " facets but holds " + std::to_string((data.size() - 84) / 50));
-    for (std::uint32_t f = 0; f < count; ++f) {
-      const char* base = data.data() + 84 + 50ull * f + 12;
-      float v[9];
-      std::memcpy(v, base, sizeof v);
-      add({v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}, f);
-    }
   }
   if (soup.triangles.empty()) throw InputError(path.string() + ": no facet");
   return soup;
