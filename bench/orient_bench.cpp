@@ -33,11 +33,11 @@ int main(int argc, char** argv) {
   const auto& s = result.summary;
   std::printf("{\"field\": \"%s\", \"voxel_mm\": %s, \"passes\": %d, \"path_length_mm\": %.0f, \"obstacle_nodes\": %d, \"tool_nodes\": %d, "
               "\"distance_field_s\": %.2f, \"voxel_field_s\": %.2f, \"poses_s\": %.2f, \"clearance_check_s\": %.2f, \"total_s\": %.2f, "
-              "\"rhs_evaluations\": %ld, \"worst_clearance_mm\": %.3f, \"collisions\": %d, \"programmed_axis_collisions\": %d}\n",
+              "\"rhs_evaluations\": %ld, \"worst_clearance_mm\": %.3f, \"collisions\": %d, \"programmed_axis_collisions\": %d, \"unreachable_poses\": %zu}\n",
               field.c_str(), voxel.c_str(), s["scene"]["passes"].get<int>(), s["scene"]["path_length_mm"].get<double>(),
               s["model"]["obstacle_nodes"].get<int>(), s["model"]["tool_nodes"].get<int>(), s["timing_s"]["distance_field"].get<double>(),
               s["timing_s"]["voxel_field"].get<double>(), s["timing_s"]["poses"].get<double>(), s["timing_s"]["clearance_check"].get<double>(), total,
               s["model"]["rhs_evaluations"].get<long>(), s["clearance"]["after"]["worst_clearance_mm"].get<double>(),
-              s["clearance"]["after"]["collisions"].get<int>(), s["clearance"]["programmed_axis"]["collisions"].get<int>());
+              s["clearance"]["after"]["collisions"].get<int>(), s["clearance"]["programmed_axis"]["collisions"].get<int>(), result.unreachable.size());
   return 0;
 }

@@ -410,11 +410,15 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   }
   const machine::ClProgram program_after = cl_program(poses_after, feed), program_before = cl_program(poses_before, feed);
   const machine::ClOnMachine on_after = machine::cl_to_machine_program(program_after, kin), on_before = machine::cl_to_machine_program(program_before, kin);
-  for (const auto* on : {&on_after, &on_before})
-    if (!on->joints.violations.empty()) {
-      const auto& v = on->joints.violations.front();
-      throw InputError(c.origin.string() + ": CL point " + std::to_string(v.pose) + " on " + m.name + ": " + v.what);
-    }
+  // A pose out of the machine's reach is reported with the rest, not thrown: the computation behind it
+  // (a quarter of an hour on the full impeller) is the programmer's to look at.
+  const auto reach = [&](const machine::ClOnMachine& on) {
+    std::vector<std::string> list;
+    for (const auto& v : on.joints.violations) list.push_back("CL point " + std::to_string(v.pose) + " on " + m.name + ": " + v.what);
+    return list;
+  };
+  result.unreachable = reach(on_after);
+  const std::vector<std::string> unreachable_before = reach(on_before);
   const double cycle_after = machine::predict_feed(on_after.program, kin).cycle_time;
   const double cycle_before = machine::predict_feed(on_before.program, kin).cycle_time;
 
@@ -466,9 +470,16 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   machine_json["part_origin_mm"] = {origin.x(), origin.y(), origin.z()};
   machine_json["cycle_time_programmed_s"] = cycle_before;
   machine_json["cycle_time_after_s"] = cycle_after;
+  const auto first_of = [](const std::vector<std::string>& list) {
+    return std::vector<std::string>(list.begin(), list.begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(list.size(), 20)));
+  };
+  machine_json["unreachable_poses_after"] = result.unreachable.size();
+  machine_json["unreachable_list_after"] = first_of(result.unreachable);
+  machine_json["unreachable_poses_programmed"] = unreachable_before.size();
+  machine_json["unreachable_list_programmed"] = first_of(unreachable_before);
   j["machine"] = machine_json;
   j["timing_s"] = {{"distance_field", t_distance}, {"voxel_field", t_voxel}, {"poses", t_pose}, {"clearance_check", t_clear}};
-  j["verdict"] = result.after.collisions.empty() ? "collision-free" : "COLLISIONS";
+  j["verdict"] = !result.after.collisions.empty() ? "COLLISIONS" : !result.unreachable.empty() ? "OUT OF THE MACHINE'S REACH" : "collision-free";
   result.summary = j;
   say("  max deviation " + std::to_string(max_dev * kDeg) + " deg; worst clearance " + std::to_string(result.after.worst_clearance) + " mm (" +
       std::to_string(result.after.collisions.size()) + " violations; programmed axis: " + std::to_string(result.before.worst_clearance) + " mm, " +
@@ -479,7 +490,7 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   const std::filesystem::path& out = options.out;
   std::filesystem::create_directories(out);
   write_file_atomically(out / "cl.csv", machine::cl_csv(program_after));
-  write_file_atomically(out / "program.ngc", machine::post_process(program_after, kin, {"drom orient " + scene.name}));
+  if (result.unreachable.empty()) write_file_atomically(out / "program.ngc", machine::post_process(program_after, kin, {"drom orient " + scene.name}));
   std::ostringstream angles, axes;
   angles << "pass,s_mm,theta_f_rad,theta_t_rad,dtheta_f_rad_s,dtheta_t_rad_s,ddtheta_f_rad_s2,ddtheta_t_rad_s2,dddtheta_f_rad_s3,dddtheta_t_rad_s3,deviation_deg,"
             "active_nodes,clearance_mm,gouge_mm\n";
@@ -548,7 +559,8 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   write_polylines_vtp(out / "poses.vtp", poses);
   write_file_atomically(out / "angles.csv", angles.str());
   write_file_atomically(out / "axes.csv", axes.str());
-  std::vector<std::string> files{"cl.csv", "program.ngc", "path.vtp", "poses.vtp", "angles.csv", "axes.csv"};
+  std::vector<std::string> files{"cl.csv", "path.vtp", "poses.vtp", "angles.csv", "axes.csv"};
+  if (result.unreachable.empty()) files.insert(files.begin() + 1, "program.ngc");
   // θ and its derivatives along s for the pass that deviates most.
   std::size_t worst = 0;
   double worst_dev = -1;

@@ -81,10 +81,13 @@ struct OrientResult {
   nlohmann::json summary;
   std::vector<AxisHistory> passes;
   ClearanceReport after, before;  // the corrected and the programmed axes
+  // Poses of the corrected axis the machine cannot reach (a stroke, a rotary limit): reported, with the
+  // rest of the result written, rather than thrown away after the whole computation. No G-code then.
+  std::vector<std::string> unreachable;
 };
 
 // Throws InputError for bad input: a check surface crossing the CL path, a tool longer than the
-// machine's Z stroke, a pose out of the machine's reach.
+// machine's Z stroke. Poses out of the machine's reach are reported (OrientResult::unreachable).
 OrientResult run_orient(const OrientCase& c, const OrientOptions& options);
 
 }  // namespace drom::paths

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
 #include <numbers>
 
@@ -176,6 +178,26 @@ TEST(OrientBadInput, OversizedScenesAreRefusedBeforeTheyAreBuilt) {
   // The shipped sizes pass: the full impeller is 427 passes.
   const OrientScene full = build_orient_scene(small_case("impeller"));
   EXPECT_EQ(full.passes.size(), 427u);
+}
+
+// A result the machine cannot reach (here the corner mounted 400 mm off the table's centre, past the
+// UCP 710's X stroke) is reported with the rest of the result, not thrown away: no G-code, the other
+// files written, the verdict and the poses in summary.json.
+TEST(OrientMachine, PosesOutOfReachAreReportedAndTheRestIsWritten) {
+  const std::filesystem::path out = std::filesystem::temp_directory_path() / ("drom_orient_reach_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(out);
+  const OrientResult r = run_orient(small_case("corner", {"machine.part_origin=[400.0, 0.0, 0.0]", "check.voxel=1"}), {out, true, true});
+  ASSERT_FALSE(r.unreachable.empty());
+  EXPECT_NE(r.unreachable.front().find("X = "), std::string::npos) << r.unreachable.front();
+  EXPECT_NE(r.unreachable.front().find("beyond its stroke"), std::string::npos) << r.unreachable.front();
+  EXPECT_EQ(r.summary["verdict"], "OUT OF THE MACHINE'S REACH");
+  EXPECT_EQ(r.summary["machine"]["unreachable_poses_after"].get<std::size_t>(), r.unreachable.size());
+  EXPECT_TRUE(std::filesystem::exists(out / "cl.csv"));
+  EXPECT_TRUE(std::filesystem::exists(out / "summary.json"));
+  EXPECT_FALSE(std::filesystem::exists(out / "program.ngc"));
+  // Mounted at the table's centre, the same case is reachable.
+  EXPECT_TRUE(run_orient(small_case("corner", {"check.voxel=1"}), {"", true, false}).unreachable.empty());
+  std::filesystem::remove_all(out);
 }
 
 // The passes are placed for the case's tool: CL = S + R n moves with the ball's radius.
