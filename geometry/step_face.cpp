@@ -370,7 +370,7 @@ class TranslatorProcess {
     if (answered) {
       std::uint64_t length = 0;
       std::memcpy(&length, head + 1, sizeof length);
-      answered = (head[0] == 'F' || head[0] == 'E') && length <= (std::uint64_t{1} << 34);
+      answered = (head[0] == 'F' || head[0] == 'E') && length <= (std::uint64_t{1} << 30);  // a face is a few MB; past 1 GB the worker is broken
       if (answered) {
         payload.resize(length);
         answered = receive_exactly(fd_, payload.data(), length, deadline, timed_out);
