@@ -14,6 +14,7 @@
 #include <IFSelect_ReturnStatus.hxx>
 #include <Interface_Check.hxx>
 #include <Interface_CheckIterator.hxx>
+#include <Interface_InterfaceModel.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
 #include <STEPControl_Reader.hxx>
@@ -93,6 +94,9 @@ const TopTools_IndexedMapOfShape& load_faces(const std::filesystem::path& path) 
   Message::DefaultMessenger()->ChangePrinters().Clear();
   STEPControl_Reader reader;
   if (reader.ReadFile(path.string().c_str()) != IFSelect_RetDone) throw InputError(path.string() + ": not a readable STEP file");
+  // A file with a header and no entity: nothing to check (OpenCASCADE's check says "DATA NOT
+  // AVAILABLE FOR CHECK"), and no face.
+  if (reader.Model().IsNull() || reader.Model()->NbEntities() == 0) throw InputError(path.string() + ": the STEP file holds no face");
   refuse_failed_checks(reader, path);
   reader.TransferRoots();
   TopTools_IndexedMapOfShape faces;
