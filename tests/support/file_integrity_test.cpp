@@ -51,12 +51,13 @@ std::string refusal(const std::filesystem::path& p) {
   return "";
 }
 
-// A sealed file of about 40 kB: a matrix and an attribute.
+// A sealed file of about 160 kB, more than the 64 KiB the seal reads at a time (a segment straddles
+// two reads): a matrix and an attribute.
 std::filesystem::path sealed_file(const std::filesystem::path& dir) {
-  std::vector<double> v(5000);
+  std::vector<double> v(20000);
   for (std::size_t i = 0; i < v.size(); ++i) v[i] = std::sin(0.01 * static_cast<double>(i));
   Hdf5Writer h5(dir / "sealed.h5");
-  h5.write("values", v, 100, 50);
+  h5.write("values", v, 400, 50);
   h5.attribute("note", std::string("a sealed file"));
   h5.commit();
   return dir / "sealed.h5";
@@ -69,7 +70,8 @@ TEST(FileSeal, ASealedFileReadsBackAndItsSealIsText) {
   const auto file = sealed_file(dir);
   EXPECT_EQ(refusal(file), "");
   const Hdf5Reader h5(file);
-  EXPECT_EQ(h5.matrix("values").rows, 100u);
+  EXPECT_EQ(h5.matrix("values").rows, 400u);
+  EXPECT_GT(std::filesystem::file_size(file), 2u * 65536u);
   EXPECT_EQ(h5.text_attribute("note"), "a sealed file");
   const std::string head = bytes_of(file).substr(0, 40);
   EXPECT_EQ(head.rfind("drom seal 1\nlength " + std::to_string(std::filesystem::file_size(file)) + "\n", 0), 0u) << head;
