@@ -5,7 +5,8 @@ if(NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")
   message(FATAL_ERROR "DROM_FUZZ needs clang (libFuzzer): CC=clang CXX=clang++ cmake -DDROM_FUZZ=ON ... (scripts/fuzz does this)")
 endif()
 add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=all -fsanitize=fuzzer-no-link -fno-omit-frame-pointer -g
-                    -fsanitize-ignorelist=${CMAKE_CURRENT_LIST_DIR}/sanitizer_ignorelist.txt)
+                    -fsanitize-ignorelist=${CMAKE_CURRENT_LIST_DIR}/sanitizer_ignorelist.txt
+                    -fsanitize-coverage-ignorelist=${CMAKE_CURRENT_LIST_DIR}/fuzz_coverage_ignorelist.txt)
 add_link_options(-fsanitize=address,undefined)
 # OpenCASCADE's blocks kept until exit are not drom's leaks (cmake/lsan_suppressions.txt).
 set(DROM_LSAN_OPTIONS LSAN_OPTIONS=suppressions=${CMAKE_CURRENT_LIST_DIR}/lsan_suppressions.txt:print_suppressions=0)

@@ -291,6 +291,9 @@ int main(int argc, char** argv) {
     // node (the mesh's std::invalid_argument).
     put(corpus / "model_fields" / "finding_22", std::string("\xff\x04\xfe\xff", 4));
     put(corpus / "database_fields" / "finding_23", std::string("\xfc\xff\x7e\xf9", 4));
+    // 26: the prior mean scaled to 5.5e306 and a mode's space factors by 1e9 (an infinite bound on
+    // the commanded offset).
+    put(corpus / "model_fields" / "finding_26", std::string("\xfe\x7f\xff\xff\x83\x01\xff", 7));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "drom_fuzz_seeds: %s\n", e.what());
     return 1;

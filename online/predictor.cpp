@@ -104,7 +104,11 @@ Predictor::Predictor(reduce::LightModel model, PredictorSettings settings) : mod
     for (Eigen::Index j = 0; j < m; ++j) {
       if (sample_inside_[j] == 0) continue;
       const Eigen::RowVectorXd g = offset_gradient(j, prior_mean);
-      max_offset_ = std::max(max_offset_, std::abs(g.dot(prior_mean)) + 4 * std::sqrt(std::max(0.0, g.dot(prior_covariance * g.transpose()))));
+      const double mean = g.dot(prior_mean), variance = g.dot(prior_covariance * g.transpose());
+      // The model reader bounds every number so that these stay finite; a bound that is not would let
+      // any offset through (and std::max would quietly drop a NaN), so it is refused here too.
+      if (!std::isfinite(mean) || !std::isfinite(variance)) throw std::invalid_argument("predictor: the model's prior gives no finite bound on the commanded offset");
+      max_offset_ = std::max(max_offset_, std::abs(mean) + 4 * std::sqrt(std::max(0.0, variance)));
     }
   }
 }

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 namespace drom::reduce {
 
@@ -36,7 +37,21 @@ void put_single(Hdf5Writer& h5, const std::string& name, const Eigen::MatrixXd& 
 
 std::vector<double> as_doubles(const std::vector<int>& v) { return {v.begin(), v.end()}; }
 
-Eigen::MatrixXd get(const Hdf5Reader& h5, const std::string& name) { return read_finite_matrix(h5, name); }
+// Every number of a light model is a length (mm), a stress (MPa), a time (s), a mode amplitude or a
+// factor of one, far inside 1e12 in a real model. Finite values near 1e306 passed, and the predictor's
+// products overflowed: an infinite bound on the commanded offset (finding 26, docs/robustness.md).
+constexpr double kLargestModelValue = 1e12;
+
+Eigen::MatrixXd get(const Hdf5Reader& h5, const std::string& name) {
+  Eigen::MatrixXd m = read_finite_matrix(h5, name);
+  if (m.size() > 0 && m.cwiseAbs().maxCoeff() > kLargestModelValue) {
+    std::ostringstream largest;
+    largest << m.cwiseAbs().maxCoeff();
+    throw InputError(h5.path().string() + ": dataset '" + name + "' holds a value of magnitude " + largest.str() +
+                     ", beyond any length, stress, time or mode amplitude of a light model (|value| <= 1e12)");
+  }
+  return m;
+}
 
 // Points stored one per row (x, y, z), as a 3 x n matrix. The shape is checked first: Eigen does not
 // check a fixed-size assignment in release builds, and 4 columns overran the 3-row buffer (a
@@ -213,7 +228,11 @@ LightModel LightModel::read(const std::filesystem::path& file) {
     throw fail("path: positions within 1e6 mm and program times within 1e7 s expected");
   if (m.tool_radius > 1e3) throw fail("tool_radius_mm: a tool radius up to 1000 mm expected");
   if (!m.final_basis.allFinite() || !m.prior_sd.allFinite()) throw fail("final_basis or prior_sd holds NaN or infinite values");
-  if (r > 0 && !(m.prior_sd.array() > 0).all()) throw fail("prior_sd: standard deviations > 0 expected");
+  // A prior standard deviation near 1e-300 squares to zero and its precision is infinite: the same
+  // overflow from below. Down to 1e-30 (precision 1e60) the predictor's arithmetic stays finite.
+  if (r > 0 && !(m.prior_sd.array() >= 1e-30).all()) throw fail("prior_sd: standard deviations of at least 1e-30 expected");
+  if (m.prior_covariance.size() > 0 && !(m.prior_covariance.diagonal().array() >= 1e-60).all())
+    throw fail("prior_covariance: variances of at least 1e-60 expected on its diagonal");
   return m;
 }
 

@@ -301,3 +301,14 @@ TEST(Predictor, TheStockTopNarrowsTheEstimate) {
   EXPECT_LT(sd_with, 0.5 * sd_without);
   EXPECT_LT(mahalanobis2, 18.5);  // chi-square, 4 dof: exceeded with probability 1e-3
 }
+
+// The reader bounds a model's numbers (finding 26); a model built in memory past them, whose prior
+// gives an infinite bound on the commanded offset, is refused rather than let any offset through.
+TEST(Predictor, AModelWithNoFiniteOffsetBoundIsRefused) {
+  reduce::LightModel model = test::synthetic_model();
+  model.prior_sd[0] = 1e200;  // a variance of 1e400
+  EXPECT_THROW(online::Predictor{model}, std::invalid_argument);
+  online::PredictorSettings bounded;
+  bounded.max_offset = 0.5;  // a bound given by the user stands, whatever the prior
+  EXPECT_EQ(online::Predictor(model, bounded).max_offset(), 0.5);
+}

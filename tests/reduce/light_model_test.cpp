@@ -177,3 +177,32 @@ TEST(LightModel, CountsAndNumbersFromTheFileAreCheckedBeforeUse) {
   EXPECT_NE(huge.find("beyond any displacement (mm) or time (s) of a job (|value| <= 1e7)"), std::string::npos) << huge;
   std::filesystem::remove_all(dir);
 }
+
+// Finding 26 (docs/robustness.md): a model whose prior mean was 5.5e306 (finite) passed the reader,
+// and the predictor's bound on the commanded offset came out infinite. Every number of a model is now
+// bounded as it is read, and a prior standard deviation too small to invert is refused.
+TEST(LightModel, NumbersPastAnyRealModelAreRefusedAsTheyAreRead) {
+  const auto dir = std::filesystem::temp_directory_path() / "drom_huge_model";
+  std::filesystem::create_directories(dir);
+  reduce::LightModel huge_mean = test::synthetic_model();
+  huge_mean.prior_mean = Eigen::VectorXd::Constant(huge_mean.rank(), 1.0);
+  huge_mean.prior_mean[0] = 5.53776e306;
+  huge_mean.write(dir / "huge_mean.h5");
+  const std::string mean = error_reading([&] { reduce::LightModel::read(dir / "huge_mean.h5"); });
+  EXPECT_EQ(mean.rfind((dir / "huge_mean.h5").string() + ": dataset 'prior_mean' holds a value of magnitude 5.53776e+306, beyond any length", 0), 0u) << mean;
+  EXPECT_NE(mean.find("(|value| <= 1e12)"), std::string::npos) << mean;
+
+  reduce::LightModel tiny_sd = test::synthetic_model();
+  tiny_sd.prior_sd[0] = 1e-300;
+  tiny_sd.write(dir / "tiny_sd.h5");
+  EXPECT_EQ(error_reading([&] { reduce::LightModel::read(dir / "tiny_sd.h5"); }),
+            (dir / "tiny_sd.h5").string() + ": prior_sd: standard deviations of at least 1e-30 expected");
+
+  // At the bounds, the model is read.
+  reduce::LightModel edge = test::synthetic_model();
+  edge.prior_sd[0] = 1e-30;
+  edge.prior_mean = Eigen::VectorXd::Constant(edge.rank(), 1e12);
+  edge.write(dir / "edge.h5");
+  EXPECT_EQ(reduce::LightModel::read(dir / "edge.h5").prior_mean[0], 1e12);
+  std::filesystem::remove_all(dir);
+}
