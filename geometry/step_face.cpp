@@ -12,13 +12,18 @@
 #include <Geom_RectangularTrimmedSurface.hxx>
 #include <Geom_Surface.hxx>
 #include <IFSelect_ReturnStatus.hxx>
+#include <IFSelect_WorkLibrary.hxx>
 #include <Interface_Check.hxx>
 #include <Interface_CheckIterator.hxx>
+#include <Interface_EntityIterator.hxx>
+#include <Interface_Graph.hxx>
 #include <Interface_InterfaceModel.hxx>
+#include <Interface_Protocol.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
 #include <STEPControl_Reader.hxx>
 #include <Standard_Failure.hxx>
+#include <TCollection_HAsciiString.hxx>
 #include <TColStd_Array1OfReal.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
@@ -46,6 +51,7 @@
 #include <mutex>
 #include <optional>
 #include <sstream>
+#include <vector>
 
 namespace drom::geometry {
 
@@ -79,6 +85,66 @@ void refuse_failed_checks(STEPControl_Reader& reader, const std::filesystem::pat
     throw InputError(path.string() + ": a malformed STEP file: " + first + (failed > 1 ? " (and " + std::to_string(failed - 1) + " more)" : ""));
 }
 
+// OpenCASCADE 7.6 follows a shape entity's references recursively (an oriented edge's edge, a trimmed
+// curve's basis curve, an offset surface's basis surface) with no guard, in its translation and
+// already in the checks its ReadFile runs: an entity that refers back to itself, directly or through
+// others, recursed until the stack ran out (a crash the step_face fuzzer found, docs/robustness.md).
+// A shape's geometry and topology form a hierarchy in any real file, so a cycle among them is
+// refused, naming it, before OpenCASCADE checks or translates anything. The search is iterative: a
+// file's own depth cannot exhaust drom's stack either.
+void refuse_reference_cycles(const Handle(Interface_InterfaceModel)& model, const Handle(Interface_Protocol)& protocol, const std::filesystem::path& path) {
+  const Interface_Graph graph(model, protocol, Standard_False);
+  const int n = model->NbEntities();
+  const auto is_shape_entity = [](const Handle(Standard_Transient)& e) {
+    const char* type = e->DynamicType()->Name();
+    return std::strncmp(type, "StepGeom_", 9) == 0 || std::strncmp(type, "StepShape_", 10) == 0;
+  };
+  const auto named = [&](int number) {
+    const Handle(Standard_Transient)& e = model->Value(number);
+    const Handle(TCollection_HAsciiString) label = model->StringLabel(e);
+    return std::string(label.IsNull() ? "#?" : label->ToCString()) + " (" + e->DynamicType()->Name() + ")";
+  };
+  const auto shared_shapes = [&](int number) {
+    std::vector<int> out;
+    for (Interface_EntityIterator it = graph.Shareds(model->Value(number)); it.More(); it.Next())
+      if (is_shape_entity(it.Value())) out.push_back(model->Number(it.Value()));
+    return out;
+  };
+  enum : char { kUnseen, kOnPath, kDone };
+  std::vector<char> state(static_cast<std::size_t>(n) + 1, kUnseen);
+  struct Visit {
+    int number;
+    std::vector<int> next;
+    std::size_t at = 0;
+  };
+  std::vector<Visit> path_to;
+  for (int root = 1; root <= n; ++root) {
+    if (state[static_cast<std::size_t>(root)] != kUnseen || !is_shape_entity(model->Value(root))) continue;
+    path_to.push_back({root, shared_shapes(root)});
+    state[static_cast<std::size_t>(root)] = kOnPath;
+    while (!path_to.empty()) {
+      Visit& v = path_to.back();
+      if (v.at == v.next.size()) {
+        state[static_cast<std::size_t>(v.number)] = kDone;
+        path_to.pop_back();
+        continue;
+      }
+      const int next = v.next[v.at++];
+      if (next <= 0 || next > n || state[static_cast<std::size_t>(next)] == kDone) continue;
+      if (state[static_cast<std::size_t>(next)] == kOnPath) {
+        std::size_t first = path_to.size() - 1;
+        while (path_to[first].number != next) --first;
+        std::string through;
+        for (std::size_t k = first + 1; k < path_to.size(); ++k) through += (through.empty() ? " through " : ", ") + named(path_to[k].number);
+        throw InputError(path.string() + ": a malformed STEP file: " + named(next) + " refers back to itself" + through +
+                         " (a shape's entities cannot refer to themselves)");
+      }
+      state[static_cast<std::size_t>(next)] = kOnPath;
+      path_to.push_back({next, shared_shapes(next)});
+    }
+  }
+}
+
 // The file's faces, each once, in OpenCASCADE's exploration order. The worker keeps the last file's
 // faces: a case that takes several faces of one part (check surfaces, a face count then a face) has
 // the file translated once, not once a face (a large assembly takes a minute or two). The cache is
@@ -93,10 +159,24 @@ const TopTools_IndexedMapOfShape& load_faces(const std::filesystem::path& path) 
   // OpenCASCADE reports its progress on stdout; drom's commands own stdout.
   Message::DefaultMessenger()->ChangePrinters().Clear();
   STEPControl_Reader reader;
-  if (reader.ReadFile(path.string().c_str()) != IFSelect_RetDone) throw InputError(path.string() + ": not a readable STEP file");
+  // What STEPControl_Reader::ReadFile does (parse, hand the model to the work session, which checks
+  // it), with the cycle check between the parse and OpenCASCADE's checks.
+  const Handle(XSControl_WorkSession)& session = reader.WS();
+  Handle(Interface_InterfaceModel) model;
+  int parsed = 1;
+  try {
+    parsed = session->WorkLibrary()->ReadFile(path.string().c_str(), model, session->Protocol());
+  } catch (const Standard_Failure&) {
+    parsed = 1;
+  }
+  if (parsed != 0 || model.IsNull()) throw InputError(path.string() + ": not a readable STEP file");
   // A file with a header and no entity: nothing to check (OpenCASCADE's check says "DATA NOT
   // AVAILABLE FOR CHECK"), and no face.
-  if (reader.Model().IsNull() || reader.Model()->NbEntities() == 0) throw InputError(path.string() + ": the STEP file holds no face");
+  if (model->NbEntities() == 0) throw InputError(path.string() + ": the STEP file holds no face");
+  refuse_reference_cycles(model, session->Protocol(), path);
+  session->SetModel(model);
+  session->SetLoadedFile(path.string().c_str());
+  session->InitTransferReader(4);
   refuse_failed_checks(reader, path);
   reader.TransferRoots();
   TopTools_IndexedMapOfShape faces;

@@ -21,6 +21,7 @@
 #include <gp_Pln.hxx>
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -144,12 +145,14 @@ TEST(StepFace, AFileWithEntitiesOpenCascadeCouldNotReadIsRefusedNamingTheLine) {
   EXPECT_NE(e.find("Incorrect syntax"), std::string::npos) << e;
 }
 
-// Found by the fuzzer past that check: an oriented edge that is its own edge sends OpenCASCADE 7.6.3
-// into an endless recursion (SIGSEGV). It runs in a worker process, so drom reports it and lives on.
-TEST(StepFace, AFileThatCrashesOpenCascadeIsAClearErrorAndDromLivesOn) {
+// Found by the fuzzer past that check: an oriented edge that is its own edge sent OpenCASCADE 7.6.3
+// into an endless recursion (SIGSEGV; the worker process contained it). A cycle among a shape's
+// entities is now refused before translation, naming it; so is one through several entities.
+TEST(StepFace, AShapeEntityThatRefersBackToItselfIsRefusedNamingTheCycle) {
   const fs::path file = scratch("own_edge.step");
   write_step(bezier_face(drom::tests::rubio_surface()), file);
-  std::string step = text_of(file);
+  const std::string sound = text_of(file);
+  std::string step = sound;
   const std::string edge = " = ORIENTED_EDGE('',*,*,#";
   const auto at = step.find(edge);
   ASSERT_NE(at, std::string::npos);
@@ -157,6 +160,49 @@ TEST(StepFace, AFileThatCrashesOpenCascadeIsAClearErrorAndDromLivesOn) {
   const std::string self = step.substr(id_start, at - id_start);
   const auto ref_end = step.find(',', at + edge.size());
   step.replace(at + edge.size() - 1, ref_end - (at + edge.size() - 1), self);
+  std::ofstream(file) << step;
+  EXPECT_EQ(error(file, 1), file.string() + ": a malformed STEP file: " + self + " (StepShape_OrientedEdge) refers back to itself (a shape's entities cannot refer to themselves)");
+  // Through two entities: the oriented edge's edge is a second oriented edge, whose edge is the first.
+  step = sound;
+  const std::string second = "#999999";
+  step.replace(at + edge.size() - 1, ref_end - (at + edge.size() - 1), second);
+  const auto data_end = step.rfind("ENDSEC;");
+  step.insert(data_end, second + " = ORIENTED_EDGE('',*,*," + self + ",.T.);\n");
+  std::ofstream(file) << step;
+  EXPECT_EQ(error(file, 1), file.string() + ": a malformed STEP file: " + self + " (StepShape_OrientedEdge) refers back to itself through " + second +
+                                " (StepShape_OrientedEdge) (a shape's entities cannot refer to themselves)");
+  // The process still reads a sound file afterwards.
+  std::ofstream(file) << sound;
+  EXPECT_EQ(drom::geometry::count_step_faces(file), 1);
+}
+
+// A crash of OpenCASCADE that drom does not foresee is contained by the worker process: oriented
+// edges nested 400 000 deep (legal STEP, no cycle) recurse past the stack in OpenCASCADE 7.6.3's
+// StepShape_OrientedEdge::EdgeStart. drom reports it and lives on.
+TEST(StepFace, AFileThatCrashesOpenCascadeIsAClearErrorAndDromLivesOn) {
+  // 400 000 frames of some 48 bytes overrun a stack of up to ~19 MB (Debian's default is 8 MB).
+  rlimit stack{};
+  ASSERT_EQ(::getrlimit(RLIMIT_STACK, &stack), 0);
+  if (stack.rlim_cur == RLIM_INFINITY || stack.rlim_cur > (16u << 20))
+    GTEST_SKIP() << "the stack limit (ulimit -s) is above 16 MB: the nested edges would not overrun it";
+  const fs::path file = scratch("deep_edges.step");
+  write_step(bezier_face(drom::tests::rubio_surface()), file);
+  std::string step = text_of(file);
+  const std::string edge = " = ORIENTED_EDGE('',*,*,#";
+  const auto at = step.find(edge);
+  ASSERT_NE(at, std::string::npos);
+  const auto ref_end = step.find(',', at + edge.size());
+  const std::string edge_curve = step.substr(at + edge.size() - 1, ref_end - (at + edge.size() - 1));
+  constexpr int kDepth = 400000, kFirst = 1000000;
+  step.replace(at + edge.size() - 1, ref_end - (at + edge.size() - 1), "#" + std::to_string(kFirst));
+  std::ostringstream chain;
+  for (int k = 0; k < kDepth; ++k) {
+    chain << '#' << kFirst + k << " = ORIENTED_EDGE('',*,*,";
+    if (k + 1 < kDepth) chain << '#' << kFirst + k + 1;
+    else chain << edge_curve;
+    chain << ",.T.);\n";
+  }
+  step.insert(step.rfind("ENDSEC;"), chain.str());
   std::ofstream(file) << step;
   EXPECT_EQ(error(file, 1).rfind(file.string() + ": OpenCASCADE crashed reading it (Segmentation fault)", 0), 0u) << error(file, 1);
   // The process still reads a sound file afterwards.
