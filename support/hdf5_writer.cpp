@@ -27,13 +27,13 @@ void check(herr_t status, const std::string& what) {
   if (status < 0) throw std::runtime_error("HDF5: cannot " + what + (errno != 0 ? std::string(": ") + std::strerror(errno) : std::string()));
 }
 
-void write_dataset(hid_t file, const std::string& name, const void* data, hid_t type, std::size_t rows, std::size_t cols) {
+void write_dataset(hid_t file, const std::string& name, const void* data, hid_t type, std::size_t rows, std::size_t cols, int deflate_level) {
   const int rank = cols == 1 ? 1 : 2;
   const hsize_t dims[2] = {rows, cols};
   const hid_t space = H5Screate_simple(rank, dims, nullptr);
   const hid_t props = H5Pcreate(H5P_DATASET_CREATE);
   H5Pset_obj_track_times(props, 0);  // no timestamps: identical content gives identical files
-  if (rows * cols >= 4096 && rows > 0 && cols > 0) {
+  if (deflate_level > 0 && rows * cols >= 4096 && rows > 0 && cols > 0) {
     // Chunks of whole rows, about 256 kB each: a chunk per row would cost an index entry and a
     // deflate stream per row (measured: 4 MB of a 13 MB model was chunk overhead).
     const hsize_t element = H5Tget_size(type);
@@ -41,7 +41,7 @@ void write_dataset(hid_t file, const std::string& name, const void* data, hid_t 
     const hsize_t chunk[2] = {rows_per_chunk, cols};
     const hsize_t chunk1[1] = {std::min<hsize_t>(rows, 65536)};
     check(H5Pset_chunk(props, rank, rank == 2 ? chunk : chunk1), "chunk " + name);
-    check(H5Pset_deflate(props, 4), "deflate " + name);
+    check(H5Pset_deflate(props, static_cast<unsigned>(deflate_level)), "deflate " + name);
   }
   errno = 0;
   const hid_t set = H5Dcreate2(file, name.c_str(), type, space, H5P_DEFAULT, props, H5P_DEFAULT);
@@ -55,7 +55,8 @@ void write_dataset(hid_t file, const std::string& name, const void* data, hid_t 
 }
 }  // namespace
 
-Hdf5Writer::Hdf5Writer(const std::filesystem::path& path) : file_(path) {
+Hdf5Writer::Hdf5Writer(const std::filesystem::path& path, int deflate_level) : file_(path), deflate_level_(deflate_level) {
+  if (deflate_level < 0 || deflate_level > 9) throw std::invalid_argument("Hdf5Writer: a deflate level from 0 (none) to 9 expected, not " + std::to_string(deflate_level));
   // The first kSealBytes are HDF5's user block: commit() writes the seal there (file_integrity.hpp).
   const hid_t create = H5Pcreate(H5P_FILE_CREATE);
   H5Pset_userblock(create, kSealBytes);
@@ -71,12 +72,12 @@ Hdf5Writer::~Hdf5Writer() {
 
 void Hdf5Writer::write(const std::string& name, const std::vector<double>& data, std::size_t rows, std::size_t cols) {
   if (data.size() != rows * cols) throw std::invalid_argument("HDF5 dataset " + name + ": size mismatch");
-  write_dataset(handle_, name, data.data(), H5T_NATIVE_DOUBLE, rows, cols);
+  write_dataset(handle_, name, data.data(), H5T_NATIVE_DOUBLE, rows, cols, deflate_level_);
 }
 
 void Hdf5Writer::write(const std::string& name, const std::vector<float>& data, std::size_t rows, std::size_t cols) {
   if (data.size() != rows * cols) throw std::invalid_argument("HDF5 dataset " + name + ": size mismatch");
-  write_dataset(handle_, name, data.data(), H5T_NATIVE_FLOAT, rows, cols);
+  write_dataset(handle_, name, data.data(), H5T_NATIVE_FLOAT, rows, cols, deflate_level_);
 }
 
 void Hdf5Writer::attribute(const std::string& name, const std::string& value) {

@@ -12,7 +12,9 @@ namespace drom {
 
 class Hdf5Writer {
  public:
-  explicit Hdf5Writer(const std::filesystem::path& path);
+  // deflate_level: zlib's level for the large datasets, 1 (fastest) to 9, or 0 to store them as they
+  // are; 4 balances size and time for drom's databases and models.
+  explicit Hdf5Writer(const std::filesystem::path& path, int deflate_level = 4);
   ~Hdf5Writer();
   Hdf5Writer(const Hdf5Writer&) = delete;
   Hdf5Writer& operator=(const Hdf5Writer&) = delete;
@@ -28,6 +30,7 @@ class Hdf5Writer {
  private:
   AtomicFile file_;
   std::int64_t handle_;
+  int deflate_level_;
 };
 
 }  // namespace drom
