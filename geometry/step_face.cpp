@@ -96,6 +96,7 @@ void refuse_reference_cycles(const Handle(Interface_InterfaceModel)& model, cons
   const Interface_Graph graph(model, protocol, Standard_False);
   const int n = model->NbEntities();
   const auto is_shape_entity = [](const Handle(Standard_Transient)& e) {
+    if (e.IsNull()) return false;
     const char* type = e->DynamicType()->Name();
     return std::strncmp(type, "StepGeom_", 9) == 0 || std::strncmp(type, "StepShape_", 10) == 0;
   };
