@@ -294,6 +294,8 @@ int main(int argc, char** argv) {
     // 26: the prior mean scaled to 5.5e306 and a mode's space factors by 1e9 (an infinite bound on
     // the commanded offset).
     put(corpus / "model_fields" / "finding_26", std::string("\xfe\x7f\xff\xff\x83\x01\xff", 7));
+    // 28: top_parametric reshaped to one column (read past its end while the stock's top was kept).
+    put(corpus / "database_fields" / "finding_28", std::string("\x7b\x40\x01\xd1\x85\xc1\xfe\x61\x80\x98\x2e\x7b\x40\xb3", 14));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "drom_fuzz_seeds: %s\n", e.what());
     return 1;

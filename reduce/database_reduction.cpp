@@ -111,8 +111,13 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
     const std::vector<int> top_ids = as_indices(read_finite_matrix(h5, "top_nodes"), xyz.rows(), db_path, "top_nodes");
     const auto ntop = static_cast<Eigen::Index>(top_ids.size());
     const Eigen::Index ns = db.station_times.size();
-    if (ntop == 0 || B1_top.rows() != ntop * ns || B1_top.cols() != db.B1.cols() || uvt.rows() != ntop)
+    if (ntop == 0 || B1_top.rows() != ntop * ns || B1_top.cols() != db.B1.cols())
       throw InputError(db_path.string() + ": B1_top has " + std::to_string(B1_top.rows()) + " rows, expected stations x top nodes");
+    // Its columns too: a one-column top_parametric was read past its end (an ASan heap-buffer-overflow,
+    // finding 28 in docs/robustness.md).
+    if (uvt.rows() != ntop || uvt.cols() != 3)
+      throw InputError(db_path.string() + ": top_parametric is " + std::to_string(uvt.rows()) + " x " + std::to_string(uvt.cols()) +
+                       ", expected one row (u, v, t) per top node: " + std::to_string(ntop) + " x 3");
     if (!B1_top.allFinite()) throw InputError(db_path.string() + ": B1_top holds NaN or infinite values");
     std::vector<Eigen::Index> rows;
     const double m = options.top_margin + 1e-9;
@@ -148,7 +153,7 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   const Eigen::MatrixXd cutting = read_finite_matrix(h5, "path_cutting");
   model.path = read_finite_matrix(h5, "path_waypoints");
   bounded(model.path, "path_waypoints");
-  if (model.path.cols() != 4 || cutting.rows() != model.path.rows() || model.path.rows() < 2 || !model.path.allFinite())
+  if (model.path.cols() != 4 || cutting.rows() != model.path.rows() || cutting.cols() != 1 || model.path.rows() < 2 || !model.path.allFinite())
     throw InputError(db_path.string() + ": path_waypoints / path_cutting: rows of x, y, z, t and one flag per row expected");
   std::vector<char> cut(static_cast<std::size_t>(cutting.rows()));
   for (Eigen::Index i = 0; i < cutting.rows(); ++i) cut[static_cast<std::size_t>(i)] = cutting(i, 0) != 0;

@@ -3,12 +3,16 @@
 // (check 2), a truth outside it (check 3), and clear errors for the wrong input.
 #include "online/predictor.hpp"
 #include "tests/online/exact_reading.hpp"
+#include "reduce/database_reduction.hpp"
 #include "reduce/light_model.hpp"
+#include "support/file_integrity.hpp"
+#include "support/input_error.hpp"
 #include "support/hdf5_reader.hpp"
 
 #include "drom_process.hpp"
 
 #include <gtest/gtest.h>
+#include <hdf5.h>
 #include <nlohmann/json.hpp>
 #include <vtkNew.h>
 #include <vtkPointData.h>
@@ -249,4 +253,46 @@ TEST_F(ModelOnARealDatabase, ReduceRefusesWhatIsNotAnOfflineDatabase) {
   r = run_drom("reduce " + (dir_ / "truth" / "database.h5").string() + " --tol -1 --out " + (dir_ / "bad").string());
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("--tol"), std::string::npos) << r.output;
+}
+
+// Finding 28 (docs/robustness.md): a database whose top_parametric had one column, not (u, v, t), was
+// read past the end of its matrix while the stock's top was kept (ASan: heap-buffer-overflow in
+// reduce_database). Its shape is now checked, and the error names the file and what was expected.
+TEST_F(ModelOnARealDatabase, ATopParametricOfTheWrongShapeIsRefusedNamingIt) {
+  const std::string coarse =
+      " --set mesh.nx=3 --set mesh.ny=3 --set path.station_spacing=400 --set removal.voxel_size=2.0"
+      " --set clamps.0.box=[0,200,0,200] --set clamps.1.box=[800,1000,0,200] --set clamps.2.box=[0,200,800,1000] --set clamps.3.box=[800,1000,800,1000]";
+  ASSERT_EQ(run("offline" + coarse + " --out " + (dir_ / "db").string()), "");
+  const auto db = dir_ / "db" / "database.h5";
+  std::size_t top_nodes = 0;
+  {
+    // Rewritten in place, then sealed again: the file is damaged the way a foreign writer would.
+    const hid_t file = H5Fopen(db.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(file, 0);
+    const hid_t old = H5Dopen2(file, "top_parametric", H5P_DEFAULT);
+    const hid_t space = H5Dget_space(old);
+    hsize_t dims[2] = {0, 0};
+    ASSERT_EQ(H5Sget_simple_extent_ndims(space), 2);
+    H5Sget_simple_extent_dims(space, dims, nullptr);
+    ASSERT_EQ(dims[1], 3u);
+    top_nodes = dims[0];
+    H5Sclose(space), H5Dclose(old);
+    ASSERT_GE(H5Ldelete(file, "top_parametric", H5P_DEFAULT), 0);
+    const std::vector<double> u(top_nodes, 500.0);
+    const hsize_t one_column[1] = {top_nodes};
+    const hid_t column = H5Screate_simple(1, one_column, nullptr);
+    const hid_t set = H5Dcreate2(file, "top_parametric", H5T_NATIVE_DOUBLE, column, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    ASSERT_GE(H5Dwrite(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, u.data()), 0);
+    H5Dclose(set), H5Sclose(column), H5Fclose(file);
+    drom::seal_file(db);
+  }
+  drom::reduce::DatabaseReductionSettings settings;
+  settings.top_margin = 50;
+  std::string error = "no error";
+  try {
+    drom::reduce::reduce_database(db, settings);
+  } catch (const drom::InputError& e) {
+    error = e.what();
+  }
+  EXPECT_EQ(error, db.string() + ": top_parametric is " + std::to_string(top_nodes) + " x 1, expected one row (u, v, t) per top node: " + std::to_string(top_nodes) + " x 3");
 }
