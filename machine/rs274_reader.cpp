@@ -81,8 +81,19 @@ std::string numbered_copy(const std::string& text) {
   return out.str();
 }
 
-// Runs the command with stdout and stderr into `output`; returns its exit status, or -1 on timeout.
-int run_with_timeout(const std::vector<std::string>& argv, const fs::path& output, std::chrono::seconds timeout) {
+// Runs the command with stdout and stderr into `output` and `home` as its HOME; returns its exit
+// status, or -1 on timeout. LinuxCNC keeps its tool table in a file mapped at $HOME/.tool.mmap, one for
+// every rs274 of the user, and unlinks it as each ends: two reads at once (drom jobs side by side,
+// ctest -j) swapped tool tables ("Requested tool 1 not found in the tool table"). Each rs274 gets its
+// own scratch folder as HOME.
+int run_with_timeout(const std::vector<std::string>& argv, const fs::path& output, std::chrono::seconds timeout, const fs::path& home) {
+  std::vector<std::string> environment;
+  for (char** e = environ; *e != nullptr; ++e)
+    if (std::strncmp(*e, "HOME=", 5) != 0) environment.emplace_back(*e);
+  environment.push_back("HOME=" + home.string());
+  std::vector<char*> env;
+  for (auto& e : environment) env.push_back(e.data());
+  env.push_back(nullptr);
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, 1, output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -92,7 +103,7 @@ int run_with_timeout(const std::vector<std::string>& argv, const fs::path& outpu
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
   pid_t pid = 0;
-  const int rc = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  const int rc = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), env.data());
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) throw std::runtime_error("cannot run " + argv[0] + ": " + std::strerror(rc));
   const auto deadline = std::chrono::steady_clock::now() + timeout;
@@ -200,11 +211,11 @@ Rs274Run run_rs274(const fs::path& program_path, const Rs274Options& options) {
       tools << 'T' << t << " P" << t << " Z" << t << " D" << (it == options.tool_diameters.end() ? 0.0 : it->second / 25.4) << " ;\n";
     }
   }
-  int status = run_with_timeout({exe, "-i", ini.string(), "-t", table.string(), "-g", copy.string()}, output, options.timeout);
+  int status = run_with_timeout({exe, "-i", ini.string(), "-t", table.string(), "-g", copy.string()}, output, options.timeout, scratch.path);
   // Killed by a signal (seen once here, a SIGBUS under heavy load): run it again once, afresh.
   if (status > 128) {
     std::ofstream(vars) << "";
-    status = run_with_timeout({exe, "-i", ini.string(), "-t", table.string(), "-g", copy.string()}, output, options.timeout);
+    status = run_with_timeout({exe, "-i", ini.string(), "-t", table.string(), "-g", copy.string()}, output, options.timeout, scratch.path);
   }
   if (status == -1)
     throw InputError(origin + ": LinuxCNC's interpreter did not finish within " + std::to_string(options.timeout.count()) +

@@ -9,10 +9,15 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
 
 using namespace drom;
 using namespace drom::machine;
@@ -124,6 +129,33 @@ TEST(ProgramReader, EveryMillingSampleOfLinuxCncIsRead) {
   RecordProperty("samples", total);
   RecordProperty("read", read);
   EXPECT_EQ(total - read, static_cast<int>(refused.size()));
+}
+
+// LinuxCNC maps its tool table at $HOME/.tool.mmap, shared by every rs274 of the user: reads at the
+// same time swapped tables ("Requested tool 1 not found in the tool table", a flaky failure of the
+// test above under ctest -j2). Each rs274 now has its own HOME; reads in parallel all succeed.
+TEST(ProgramReader, ReadsThroughRs274AtTheSameTimeKeepTheirOwnToolTables) {
+  const fs::path comp = "/usr/share/linuxcnc/ncfiles/comp.ngc";  // selects T1 and compensates its radius
+  if (!rs274_available() || !fs::exists(comp)) GTEST_SKIP() << "LinuxCNC's samples are not installed";
+  const std::size_t moves = read_program(comp).moves.size();
+  std::atomic<int> failed{0};
+  std::string first_error;
+  std::mutex error_lock;
+  std::vector<std::thread> readers;
+  for (int t = 0; t < 6; ++t)
+    readers.emplace_back([&] {
+      for (int k = 0; k < 8; ++k) {
+        try {
+          if (read_program(comp).moves.size() != moves) ++failed;
+        } catch (const InputError& e) {
+          ++failed;
+          const std::lock_guard<std::mutex> hold(error_lock);
+          if (first_error.empty()) first_error = e.what();
+        }
+      }
+    });
+  for (auto& r : readers) r.join();
+  EXPECT_EQ(failed.load(), 0) << first_error;
 }
 
 TEST(ProgramReader, BadProgramsNameTheirLine) {
