@@ -13,7 +13,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <sstream>
 
 namespace drom::reduce {
 
@@ -57,10 +56,7 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
   // finite values near 1e300 would overflow the POD's products into infinities (finding 17).
   const auto bounded = [&](const Eigen::MatrixXd& m, const std::string& name, double most = 1e7,
                            const std::string& what = "any displacement (mm) or time (s) of a job (|value| <= 1e7)") {
-    if (m.size() == 0 || m.cwiseAbs().maxCoeff() <= most) return;
-    std::ostringstream largest;
-    largest << m.cwiseAbs().maxCoeff();
-    throw InputError(db_path.string() + ": dataset '" + name + "' holds a value of magnitude " + largest.str() + ", beyond " + what);
+    require_magnitude_within(h5, name, m, most, what);
   };
   SnapshotDatabase db;
   db.B1 = read_finite_matrix(h5, "B1");

@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 
 namespace drom::reduce {
 
@@ -44,12 +43,7 @@ constexpr double kLargestModelValue = 1e12;
 
 Eigen::MatrixXd get(const Hdf5Reader& h5, const std::string& name) {
   Eigen::MatrixXd m = read_finite_matrix(h5, name);
-  if (m.size() > 0 && m.cwiseAbs().maxCoeff() > kLargestModelValue) {
-    std::ostringstream largest;
-    largest << m.cwiseAbs().maxCoeff();
-    throw InputError(h5.path().string() + ": dataset '" + name + "' holds a value of magnitude " + largest.str() +
-                     ", beyond any length, stress, time or mode amplitude of a light model (|value| <= 1e12)");
-  }
+  require_magnitude_within(h5, name, m, kLargestModelValue, "any length, stress, time or mode amplitude of a light model (|value| <= 1e12)");
   return m;
 }
 

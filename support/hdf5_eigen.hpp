@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 
 #include <cmath>
+#include <sstream>
 #include <string>
 
 namespace drom {
@@ -26,6 +27,16 @@ inline Eigen::MatrixXd read_finite_matrix(const Hdf5Reader& h5, const std::strin
         throw InputError(h5.path().string() + ": dataset '" + name + "' holds " + std::to_string(m(r, c)) + " at row " + std::to_string(r) + ", column " +
                          std::to_string(c) + ": finite numbers expected");
   return m;
+}
+
+// A dataset's values within `most` in magnitude. Finite values near 1e300 pass read_finite_matrix and
+// overflow the products made of them later; `what` names what the values are and the bound
+// ("any displacement (mm) or time (s) of a job (|value| <= 1e7)").
+inline void require_magnitude_within(const Hdf5Reader& h5, const std::string& name, const Eigen::MatrixXd& m, double most, const std::string& what) {
+  if (m.size() == 0 || m.cwiseAbs().maxCoeff() <= most) return;
+  std::ostringstream largest;
+  largest << m.cwiseAbs().maxCoeff();
+  throw InputError(h5.path().string() + ": dataset '" + name + "' holds a value of magnitude " + largest.str() + ", beyond " + what);
 }
 
 }  // namespace drom

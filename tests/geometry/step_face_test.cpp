@@ -120,6 +120,21 @@ std::string text_of(const fs::path& file) {
   return text.str();
 }
 
+// The first ORIENTED_EDGE of a STEP text: its own id ("#20") and the span of its edge reference (the
+// "#21" of `#20 = ORIENTED_EDGE('',*,*,#21,.T.)`); edge_at is npos where there is none.
+struct OrientedEdge {
+  std::string self;
+  std::size_t edge_at = std::string::npos, edge_length = 0;
+};
+OrientedEdge first_oriented_edge(const std::string& step) {
+  const std::string head = " = ORIENTED_EDGE('',*,*,";
+  const auto at = step.find(head + "#");
+  if (at == std::string::npos) return {};
+  const auto id_start = step.rfind('#', at);
+  const auto edge_at = at + head.size();
+  return {step.substr(id_start, at - id_start), edge_at, step.find(',', edge_at) - edge_at};
+}
+
 // Fuzz finding 14 (docs/robustness.md): a vertex whose point entity has a damaged type name made
 // OpenCASCADE 7.6.3 dereference a null point (StepGeom_CartesianPoint::NbCoordinates, SIGSEGV) while
 // translating. A file whose entities OpenCASCADE could not read is now refused before any translation,
@@ -152,20 +167,17 @@ TEST(StepFace, AShapeEntityThatRefersBackToItselfIsRefusedNamingTheCycle) {
   const fs::path file = scratch("own_edge.step");
   write_step(bezier_face(drom::tests::rubio_surface()), file);
   const std::string sound = text_of(file);
+  const OrientedEdge edge = first_oriented_edge(sound);
+  ASSERT_NE(edge.edge_at, std::string::npos);
+  const std::string& self = edge.self;
   std::string step = sound;
-  const std::string edge = " = ORIENTED_EDGE('',*,*,#";
-  const auto at = step.find(edge);
-  ASSERT_NE(at, std::string::npos);
-  const auto id_start = step.rfind('#', at);
-  const std::string self = step.substr(id_start, at - id_start);
-  const auto ref_end = step.find(',', at + edge.size());
-  step.replace(at + edge.size() - 1, ref_end - (at + edge.size() - 1), self);
+  step.replace(edge.edge_at, edge.edge_length, self);
   std::ofstream(file) << step;
   EXPECT_EQ(error(file, 1), file.string() + ": a malformed STEP file: " + self + " (StepShape_OrientedEdge) refers back to itself (a shape's entities cannot refer to themselves)");
   // Through two entities: the oriented edge's edge is a second oriented edge, whose edge is the first.
   step = sound;
   const std::string second = "#999999";
-  step.replace(at + edge.size() - 1, ref_end - (at + edge.size() - 1), second);
+  step.replace(edge.edge_at, edge.edge_length, second);
   const auto data_end = step.rfind("ENDSEC;");
   step.insert(data_end, second + " = ORIENTED_EDGE('',*,*," + self + ",.T.);\n");
   std::ofstream(file) << step;
@@ -188,13 +200,11 @@ TEST(StepFace, AFileThatCrashesOpenCascadeIsAClearErrorAndDromLivesOn) {
   const fs::path file = scratch("deep_edges.step");
   write_step(bezier_face(drom::tests::rubio_surface()), file);
   std::string step = text_of(file);
-  const std::string edge = " = ORIENTED_EDGE('',*,*,#";
-  const auto at = step.find(edge);
-  ASSERT_NE(at, std::string::npos);
-  const auto ref_end = step.find(',', at + edge.size());
-  const std::string edge_curve = step.substr(at + edge.size() - 1, ref_end - (at + edge.size() - 1));
+  const OrientedEdge edge = first_oriented_edge(step);
+  ASSERT_NE(edge.edge_at, std::string::npos);
+  const std::string edge_curve = step.substr(edge.edge_at, edge.edge_length);
   constexpr int kDepth = 400000, kFirst = 1000000;
-  step.replace(at + edge.size() - 1, ref_end - (at + edge.size() - 1), "#" + std::to_string(kFirst));
+  step.replace(edge.edge_at, edge.edge_length, "#" + std::to_string(kFirst));
   std::ostringstream chain;
   for (int k = 0; k < kDepth; ++k) {
     chain << '#' << kFirst + k << " = ORIENTED_EDGE('',*,*,";
