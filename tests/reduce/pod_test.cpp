@@ -99,6 +99,8 @@ TEST(SpaceTimeField, SeparatedFormIsWithinItsBoundAndLinearBetweenInstants) {
 
 #include <filesystem>
 #include <fstream>
+#include <random>
+#include <algorithm>
 
 TEST(DeviationFamily, MeasuredSurfacesJoinTheFamilyAndBadFilesAreNamed) {
   // A measured blank (a tilted plane sampled on a coarse grid, with a header line) lands on the
@@ -128,4 +130,35 @@ TEST(DeviationFamily, MeasuredSurfacesJoinTheFamilyAndBadFilesAreNamed) {
   }
   std::filesystem::remove(csv);
   EXPECT_THROW(family.add_measured(csv), drom::InputError);
+}
+
+TEST(DeviationFamily, AScanOfManyPointsIsInterpolatedFromItsFourNearestAsAFullSearchWould) {
+  // A scattered scan (not on the grid, so every grid value is a weighted mean of 4 neighbours):
+  // each value must equal the inverse-distance mean over the 4 nearest found by checking every point.
+  const auto csv = std::filesystem::temp_directory_path() / "drom_scattered_scan.csv";
+  std::vector<Eigen::Vector3d> points;
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> across(-5, 105), wobble(-0.2, 0.2);
+  {
+    std::ofstream out(csv);
+    out.precision(17);
+    for (int k = 0; k < 3000; ++k) {
+      const Eigen::Vector3d p(across(random), across(random), 2 + wobble(random));
+      points.push_back(p);
+      out << p.x() << "," << p.y() << "," << p.z() << "\n";
+    }
+  }
+  drom::reduce::DeviationFamily family(drom::reduce::DeviationGrid{0, 100, 0, 100, 21, 17});
+  family.add_measured(csv, 2.0);
+  std::filesystem::remove(csv);
+  const auto& g = family.grid();
+  for (int j = 0; j < g.ny; ++j)
+    for (int i = 0; i < g.nx; ++i) {
+      std::vector<std::pair<double, double>> by_distance;  // (squared distance in xy, deviation)
+      for (const auto& p : points) by_distance.emplace_back((p.x() - g.x(i)) * (p.x() - g.x(i)) + (p.y() - g.y(j)) * (p.y() - g.y(j)), p.z() - 2.0);
+      std::partial_sort(by_distance.begin(), by_distance.begin() + 4, by_distance.end());
+      double w = 0, v = 0;
+      for (int k = 0; k < 4; ++k) w += 1 / by_distance[k].first, v += by_distance[k].second / by_distance[k].first;
+      EXPECT_NEAR(family.snapshots()(g.index(i, j), 0), v / w, 1e-12) << "at grid point " << i << ", " << j;
+    }
 }
