@@ -89,6 +89,7 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
   const double smallest = s.smallest_step > 0 ? s.smallest_step : 0.05 * level_step;
   const double longest_link = s.longest_link > 0 ? s.longest_link : std::max(2.0, 5 * level_step);
   const double steepest = std::cos(s.steepest * std::numbers::pi / 180);
+  const double steepest_slope = std::tan(s.steepest * std::numbers::pi / 180);
   const double shortest = s.shortest_move > 0 ? s.shortest_move : s.longitudinal_step / 16;
 
   CloudFinishing out;
@@ -192,10 +193,30 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
     Unresolved unresolved;
   };
   std::vector<std::vector<Segment>> segments(rows.size());
+  // Where the chord tests along a move a -> b go, and what error they may allow. Over one of the
+  // points it touches, the cutter's dropped tip follows a sphere of the corner radius r; a straight
+  // move between two tests h apart sags below such a sphere by up to h^2 / (8 r cos^3 θ) vertically
+  // (θ its slope), which the tests do not see. The tests are placed so that this sag is at most a
+  // quarter of Tu, and the error they see is held to what is left. A flat end mill's envelope has
+  // steps, not a curvature: there, the tests keep the given spacing and the whole of Tu.
+  struct ChordTests {
+    double spacing, tolerance;
+  };
+  const double least_cos = std::max(0.1, std::cos(s.steepest * std::numbers::pi / 180));
+  const auto chord_tests = [&](const Node& a, const Node& b) -> ChordTests {
+    const double r = cutter.corner_radius;
+    if (!(r > 0)) return {check, s.chord_tolerance};
+    const double run = std::hypot(b.x - a.x, b.y - a.y);
+    const double chord_cos = run > 0 ? run / std::hypot(run, b.drop.tip - a.drop.tip) : 1.0;
+    const double c = std::clamp(std::min({chord_cos, std::abs(a.drop.normal.z()), std::abs(b.drop.normal.z())}), least_cos, 1.0);
+    const double spacing = std::clamp(std::sqrt(2 * r * s.chord_tolerance * c * c * c), 0.5 * shortest, check);
+    return {spacing, std::max(0.25 * s.chord_tolerance, s.chord_tolerance - spacing * spacing / (8 * r * c * c * c))};
+  };
   const auto refine = [&](const Node& a, const Node& b, std::vector<Node>& into, long long& inserted, Unresolved& unresolved, auto& self, int depth) -> void {
     const double length = std::abs(b.x - a.x);
+    const ChordTests tests = chord_tests(a, b);
     // At least the middle, however short the move, down to the shortest move allowed.
-    const int samples = std::max(1, static_cast<int>(std::ceil(length / check)) - 1);
+    const int samples = std::max(1, static_cast<int>(std::ceil(length / tests.spacing)) - 1);
     if (length > shortest && depth < 40) {
       double worst = 0;
       Node worst_node;
@@ -208,7 +229,7 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
         const double error = std::abs(a.drop.tip + t * (b.drop.tip - a.drop.tip) - m.drop.tip);
         if (error > worst) worst = error, worst_node = m;
       }
-      if (worst > s.chord_tolerance) {
+      if (worst > tests.tolerance) {
         ++inserted;
         self(a, worst_node, into, inserted, unresolved, self, depth + 1);
         into.push_back(worst_node);
@@ -265,11 +286,13 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
   const auto link_is_safe = [&](const Node& a, const Node& b) {
     const double length = std::hypot(b.x - a.x, b.y - a.y);
     if (length > longest_link) return false;
-    const int samples = std::max(1, static_cast<int>(std::ceil(length / check)));
+    const ChordTests tests = chord_tests(a, b);
+    // At least the middle: a link shorter than the spacing is tested too.
+    const int samples = std::max(2, static_cast<int>(std::ceil(length / tests.spacing)));
     for (int i = 1; i < samples; ++i) {
       const double t = static_cast<double>(i) / samples;
       const Drop d = drop_assembly(bins, a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), s.tool);
-      if (d.tip > a.drop.tip + t * (b.drop.tip - a.drop.tip) + s.chord_tolerance) return false;
+      if (d.tip > a.drop.tip + t * (b.drop.tip - a.drop.tip) + tests.tolerance) return false;
     }
     return true;
   };
@@ -303,7 +326,10 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
           // lower end to the highest drop along it, across, down.
           const Node& a = segment.nodes[k - 1];
           double highest = std::max(a.drop.tip, n.drop.tip);
-          bool straight = true;
+          // A move steeper than any contact the passes follow crosses a step in the dropped height
+          // (a wall, or the cloud's edge seen from beside): where the step lies along it no sample
+          // tells, and the straight move cuts the corner by up to the step's height.
+          bool straight = std::abs(n.drop.tip - a.drop.tip) <= std::abs(n.x - a.x) * steepest_slope;
           const int samples = 4;
           for (int i = 1; i < samples; ++i) {
             const double t = static_cast<double>(i) / samples;

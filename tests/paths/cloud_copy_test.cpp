@@ -56,7 +56,7 @@ TEST(CloudCopy, FemurHeadOnANeckIsCoveredByFewPacketsAndRoughedWithNoCollision) 
   }
 }
 
-TEST(CloudCopy, DISABLED_FemurHeadFinishingPathsClearTheCloudWithTheWholeTool) {
+TEST(CloudCopy, FemurHeadFinishingPathsClearTheCloudWithTheWholeTool) {
   const auto part = drom::tests::femur_head(20, 9, 45, 1.0);
   drom::geometry::PointCloud cloud;
   cloud.points = part.points, cloud.normals = part.normals;
