@@ -136,8 +136,8 @@ bool CloudBins::block_range(int l, double x, double y, double r, int& i0, int& i
   return true;
 }
 
-double CloudBins::max_z_within(double x, double y, double r) const {
-  double best = kNone;
+double CloudBins::max_z_within(double x, double y, double r, double above) const {
+  double best = std::max(kNone, above);
   int i0, i1, j0, j1;
   if (points_.empty() || !(r >= 0)) return best;
   const int l = start_level(r);

@@ -7,6 +7,7 @@
 // large radius (a 53 mm holder) costs little more than a small one.
 #include <Eigen/Core>
 
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -41,7 +42,9 @@ class CloudBins {
   double cell_distance2(int i, int j, double x, double y) const;
 
   // The highest z of the points within r of (x, y) in XY (distance <= r), or -infinity when none.
-  double max_z_within(double x, double y, double r) const;
+  // With `above`: the larger of that and `above`, and no block whose maximum is not above it is read
+  // (for a caller that only cares about points higher than something it already has).
+  double max_z_within(double x, double y, double r, double above = -std::numeric_limits<double>::infinity()) const;
   // Whether some point within r of (x, y) in XY (distance < r) lies strictly above z.
   bool any_above(double x, double y, double r, double z) const;
 

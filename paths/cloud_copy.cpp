@@ -8,6 +8,8 @@
 #include "support/input_error.hpp"
 #include "support/resources.hpp"
 
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -182,15 +184,20 @@ CopyResult copy_cloud(const geometry::PointCloud& cloud, const CopySettings& s, 
       double bottom = 1e300;
       for (const auto& p : mine) bottom = std::min(bottom, p.z());
       plan.roughing = plan_cloud_roughing(*map, plan.frame, stock, area, bottom, s.roughing);
-      make_program(plan.rough_op, plan.roughing->path, plan.frame, s.roughing_feed, name + " roughing", 2, s, kin);
-      plan.rough_op.check = check_path(bins, plan.roughing->path, s.roughing.tool, s.roughing.tool.cutter.radius / 4, 0);
+      // The program (post-processing and feed prediction, one thread) and the whole-tool check (many)
+      // read the same path: side by side.
+      tbb::parallel_invoke([&] { make_program(plan.rough_op, plan.roughing->path, plan.frame, s.roughing_feed, name + " roughing", 2, s, kin); },
+                           [&] { plan.rough_op.check = check_path(bins, plan.roughing->path, s.roughing.tool, s.roughing.tool.cutter.radius / 4, 0); });
       watch.add_to("roughing");
     }
     try {
       const CloudArea area(mine, std::max(s.finishing.longitudinal_step, s.normals.grid_step), s.finishing.tool.cutter.radius);
       plan.finishing = plan_cloud_finishing(bins, area, s.finishing);
-      make_program(plan.finish_op, plan.finishing->path, plan.frame, s.finishing_feed, name + " finishing", 1, s, kin);
-      plan.finish_op.check = check_path(bins, plan.finishing->path, s.finishing.tool, std::max(0.05, s.finishing.longitudinal_step / 2), s.finishing.chord_tolerance);
+      tbb::parallel_invoke([&] { make_program(plan.finish_op, plan.finishing->path, plan.frame, s.finishing_feed, name + " finishing", 1, s, kin); },
+                           [&] {
+                             plan.finish_op.check =
+                                 check_path(bins, plan.finishing->path, s.finishing.tool, std::max(0.05, s.finishing.longitudinal_step / 2), s.finishing.chord_tolerance);
+                           });
     } catch (const InputError& e) {
       plan.error = e.what();
     }

@@ -189,6 +189,9 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
   };
   struct Segment {
     std::vector<Node> nodes;
+    // Per node k > 0: the height the move from node k - 1 goes round the corner at, or NaN when it
+    // goes straight.
+    std::vector<double> round_at;
     long long inserted = 0;
     Unresolved unresolved;
   };
@@ -253,13 +256,37 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
       }
     }
   };
+  // A move the chord test could not resolve (a wall, a step in the dropped height: no node insertion
+  // makes the straight move clear it) goes round the corner instead: up at the lower end to the
+  // highest drop along it, across, down.
+  const auto round_the_corner_at = [&](const Node& a, const Node& n) {
+    double highest = std::max(a.drop.tip, n.drop.tip);
+    // A move steeper than any contact the passes follow crosses a step in the dropped height
+    // (a wall, or the cloud's edge seen from beside): where the step lies along it no sample
+    // tells, and the straight move cuts the corner by up to the step's height.
+    bool straight = std::abs(n.drop.tip - a.drop.tip) <= std::abs(n.x - a.x) * steepest_slope;
+    const int samples = 4;
+    for (int i = 1; i < samples; ++i) {
+      const double t = static_cast<double>(i) / samples;
+      const double d = drop_assembly(bins, a.x + t * (n.x - a.x), a.y + t * (n.y - a.y), s.tool).tip;
+      highest = std::max(highest, d);
+      // Well beyond the tolerance only: a resolved move may stray by about Tu between the
+      // points the chord test looked at.
+      if (d > a.drop.tip + t * (n.drop.tip - a.drop.tip) + 4 * s.chord_tolerance) straight = false;
+    }
+    return straight ? std::numeric_limits<double>::quiet_NaN() : highest;
+  };
   tbb::parallel_for(std::size_t(0), rows.size(), [&](std::size_t j) {
     const bool reverse = s.zigzag && j % 2 == 1;
     std::vector<Node> ordered = rows[j].nodes;
     if (reverse) std::reverse(ordered.begin(), ordered.end());
     Segment current;
     const auto close = [&] {
-      if (!current.nodes.empty()) segments[j].push_back(std::move(current));
+      if (!current.nodes.empty()) {
+        current.round_at.assign(current.nodes.size(), std::numeric_limits<double>::quiet_NaN());
+        for (std::size_t k = 1; k < current.nodes.size(); ++k) current.round_at[k] = round_the_corner_at(current.nodes[k - 1], current.nodes[k]);
+        segments[j].push_back(std::move(current));
+      }
       current = Segment();
     };
     for (const Node& n : ordered) {
@@ -320,30 +347,12 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
       const bool linked = last && path.motion.back() != Motion::rapid;
       for (std::size_t k = 0; k < segment.nodes.size(); ++k) {
         const Node& n = segment.nodes[k];
-        if (k > 0) {
-          // A move the chord test could not resolve (a wall, a step in the dropped height: no node
-          // insertion makes the straight move clear it) goes round the corner instead: up at the
-          // lower end to the highest drop along it, across, down.
+        if (k > 0 && !std::isnan(segment.round_at[k])) {
           const Node& a = segment.nodes[k - 1];
-          double highest = std::max(a.drop.tip, n.drop.tip);
-          // A move steeper than any contact the passes follow crosses a step in the dropped height
-          // (a wall, or the cloud's edge seen from beside): where the step lies along it no sample
-          // tells, and the straight move cuts the corner by up to the step's height.
-          bool straight = std::abs(n.drop.tip - a.drop.tip) <= std::abs(n.x - a.x) * steepest_slope;
-          const int samples = 4;
-          for (int i = 1; i < samples; ++i) {
-            const double t = static_cast<double>(i) / samples;
-            const double d = drop_assembly(bins, a.x + t * (n.x - a.x), a.y + t * (n.y - a.y), s.tool).tip;
-            highest = std::max(highest, d);
-            // Well beyond the tolerance only: a resolved move may stray by about Tu between the
-            // points the chord test looked at.
-            if (d > a.drop.tip + t * (n.drop.tip - a.drop.tip) + 4 * s.chord_tolerance) straight = false;
-          }
-          if (!straight) {
-            ++out.stepped;
-            if (highest > a.drop.tip) path.add({a.x, a.y, highest}, Motion::cut, static_cast<int>(j));
-            if (highest > n.drop.tip) path.add({n.x, n.y, highest}, Motion::cut, static_cast<int>(j));
-          }
+          const double highest = segment.round_at[k];
+          ++out.stepped;
+          if (highest > a.drop.tip) path.add({a.x, a.y, highest}, Motion::cut, static_cast<int>(j));
+          if (highest > n.drop.tip) path.add({n.x, n.y, highest}, Motion::cut, static_cast<int>(j));
         }
         path.add(n.tip(), k == 0 && linked ? Motion::link : Motion::cut, static_cast<int>(j), n.drop.normal);
       }

@@ -1,5 +1,7 @@
 #include "paths/path_check.hpp"
 
+#include "paths/tool_drop.hpp"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -10,20 +12,17 @@ namespace drom::paths {
 
 namespace {
 
-// How deep the tool with its tip at `tip` stands inside the points: the cutter point by point, the
-// shank and the holder by the highest point under them.
+// How deep the tool with its tip at `tip` stands inside the points: the cutter by where it would
+// stand dropped there (every point under it, the same drop the bins give the paths, which the tests
+// hold to brute force bit for bit), the shank and the holder by the highest point under them.
 double depth_at(const geometry::CloudBins& bins, const Eigen::Vector3d& tip, const ToolAssembly& tool) {
-  double deepest = -1e300;
-  int i0, i1, j0, j1;
-  if (bins.cell_range(tip.x(), tip.y(), tool.cutter.radius, i0, i1, j0, j1))
-    for (int j = j0; j <= j1; ++j)
-      for (int i = i0; i <= i1; ++i)
-        for (const auto& p : bins.cell_points(i, j)) {
-          const double rho = std::hypot(p.x - tip.x(), p.y - tip.y());
-          if (rho <= tool.cutter.radius) deepest = std::max(deepest, p.z - tip.z() - cutter_height(tool.cutter, rho));
-        }
-  if (tool.shank() > tool.cutter.radius) deepest = std::max(deepest, bins.max_z_within(tip.x(), tip.y(), tool.shank()) - tip.z() - tool.flutes());
-  if (tool.has_holder()) deepest = std::max(deepest, bins.max_z_within(tip.x(), tip.y(), tool.holder_radius) - tip.z() - tool.gauge_length);
+  const Drop cutter = drop_tool(bins, tip.x(), tip.y(), tool.cutter);
+  double deepest = cutter.contact ? cutter.tip - tip.z() : -1e300;
+  // The shank and the holder only matter where they stand deeper than the cutter: their queries
+  // read no block lower than that (less a margin for the rounding of the sums).
+  const auto deeper = [&](double height) { return deepest + tip.z() + height - 1e-9 * (1 + std::abs(tip.z()) + height); };
+  if (tool.shank() > tool.cutter.radius) deepest = std::max(deepest, bins.max_z_within(tip.x(), tip.y(), tool.shank(), deeper(tool.flutes())) - tip.z() - tool.flutes());
+  if (tool.has_holder()) deepest = std::max(deepest, bins.max_z_within(tip.x(), tip.y(), tool.holder_radius, deeper(tool.gauge_length)) - tip.z() - tool.gauge_length);
   return deepest;
 }
 

@@ -114,8 +114,12 @@ Drop drop_tool(const geometry::CloudKdTree& xy_tree, std::span<const Eigen::Vect
 Drop drop_assembly(const geometry::CloudBins& bins, double x, double y, const ToolAssembly& tool) {
   Drop d = drop_tool(bins, x, y, tool.cutter);
   double floor = -std::numeric_limits<double>::infinity();
-  if (tool.shank() > tool.cutter.radius) floor = std::max(floor, bins.max_z_within(x, y, tool.shank()) - tool.flutes());
-  if (tool.has_holder() && tool.holder_radius > tool.cutter.radius) floor = std::max(floor, bins.max_z_within(x, y, tool.holder_radius) - tool.gauge_length);
+  // Only points that would lift the tool above the cutter's own drop matter: the queries read no
+  // block lower than that (less a margin for the rounding of the sums, so the result is exact).
+  const auto lifting = [&](double height) { return std::max(d.tip, floor) + height - 1e-9 * (1 + std::abs(d.tip) + height); };
+  if (tool.shank() > tool.cutter.radius) floor = std::max(floor, bins.max_z_within(x, y, tool.shank(), lifting(tool.flutes())) - tool.flutes());
+  if (tool.has_holder() && tool.holder_radius > tool.cutter.radius)
+    floor = std::max(floor, bins.max_z_within(x, y, tool.holder_radius, lifting(tool.gauge_length)) - tool.gauge_length);
   if (floor > d.tip) {
     d.tip = floor;
     d.lifted = true;

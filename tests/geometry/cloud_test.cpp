@@ -209,6 +209,8 @@ TEST(CloudBins, QueriesAgreeWithBruteForce) {
         if (d2 < radius * radius && c.points[i].z() > z) above = true;
       }
       EXPECT_EQ(bins.max_z_within(x, y, radius), top);
+      // With a floor: the larger of it and the highest point, whichever blocks it let the query skip.
+      EXPECT_EQ(bins.max_z_within(x, y, radius, z), std::max(top, z));
       EXPECT_EQ(bins.any_above(x, y, radius, z), above);
       bins.within(x, y, radius, a);
       std::sort(a.begin(), a.end());
