@@ -89,7 +89,7 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
   const double smallest = s.smallest_step > 0 ? s.smallest_step : 0.05 * level_step;
   const double longest_link = s.longest_link > 0 ? s.longest_link : std::max(2.0, 5 * level_step);
   const double steepest = std::cos(s.steepest * std::numbers::pi / 180);
-  const double steepest_slope = std::tan(s.steepest * std::numbers::pi / 180);
+  const double steepest_slope = s.steepest < 90 ? std::tan(s.steepest * std::numbers::pi / 180) : kInfinity;
   const double shortest = s.shortest_move > 0 ? s.shortest_move : s.longitudinal_step / 16;
 
   CloudFinishing out;
@@ -201,7 +201,9 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
   // move between two tests h apart sags below such a sphere by up to h^2 / (8 r cos^3 θ) vertically
   // (θ its slope), which the tests do not see. The tests are placed so that this sag is at most a
   // quarter of Tu, and the error they see is held to what is left. A flat end mill's envelope has
-  // steps, not a curvature: there, the tests keep the given spacing and the whole of Tu.
+  // steps, not a curvature: there, the tests keep the given spacing and the whole of Tu. The bound is
+  // not kept where it would ask for tests closer than half the shortest move, or on contacts steeper
+  // than `steepest` (θ is taken no steeper): there the tests still hold a quarter of Tu.
   struct ChordTests {
     double spacing, tolerance;
   };
@@ -212,7 +214,7 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
     const double run = std::hypot(b.x - a.x, b.y - a.y);
     const double chord_cos = run > 0 ? run / std::hypot(run, b.drop.tip - a.drop.tip) : 1.0;
     const double c = std::clamp(std::min({chord_cos, std::abs(a.drop.normal.z()), std::abs(b.drop.normal.z())}), least_cos, 1.0);
-    const double spacing = std::clamp(std::sqrt(2 * r * s.chord_tolerance * c * c * c), 0.5 * shortest, check);
+    const double spacing = std::min(check, std::max(0.5 * shortest, std::sqrt(2 * r * s.chord_tolerance * c * c * c)));
     return {spacing, std::max(0.25 * s.chord_tolerance, s.chord_tolerance - spacing * spacing / (8 * r * c * c * c))};
   };
   const auto refine = [&](const Node& a, const Node& b, std::vector<Node>& into, long long& inserted, Unresolved& unresolved, auto& self, int depth) -> void {
@@ -261,18 +263,23 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
   // highest drop along it, across, down.
   const auto round_the_corner_at = [&](const Node& a, const Node& n) {
     double highest = std::max(a.drop.tip, n.drop.tip);
-    // A move steeper than any contact the passes follow crosses a step in the dropped height
-    // (a wall, or the cloud's edge seen from beside): where the step lies along it no sample
-    // tells, and the straight move cuts the corner by up to the step's height.
-    bool straight = std::abs(n.drop.tip - a.drop.tip) <= std::abs(n.x - a.x) * steepest_slope;
-    const int samples = 4;
+    // A move steeper than any contact the passes follow: on a steep flank the sag bound of the
+    // chord tests no longer holds (the slope enters it cubed), and a move the chord test left as
+    // short as it goes crosses a step in the dropped height (a wall, the cloud's edge seen from
+    // beside) that no sample need fall on. Such a move is looked at closely, held to Tu, and one
+    // as short as it goes is never fed straight.
+    const double run = std::abs(n.x - a.x);
+    const bool steep = std::abs(n.drop.tip - a.drop.tip) > run * steepest_slope;
+    bool straight = !(steep && run <= shortest * (1 + 1e-9));
+    const int samples = steep ? 16 : 4;
+    // Elsewhere, well beyond the tolerance only: a resolved move may stray by about Tu between the
+    // points the chord test looked at.
+    const double allowance = steep ? s.chord_tolerance : 4 * s.chord_tolerance;
     for (int i = 1; i < samples; ++i) {
       const double t = static_cast<double>(i) / samples;
       const double d = drop_assembly(bins, a.x + t * (n.x - a.x), a.y + t * (n.y - a.y), s.tool).tip;
       highest = std::max(highest, d);
-      // Well beyond the tolerance only: a resolved move may stray by about Tu between the
-      // points the chord test looked at.
-      if (d > a.drop.tip + t * (n.drop.tip - a.drop.tip) + 4 * s.chord_tolerance) straight = false;
+      if (d > a.drop.tip + t * (n.drop.tip - a.drop.tip) + allowance) straight = false;
     }
     return straight ? std::numeric_limits<double>::quiet_NaN() : highest;
   };

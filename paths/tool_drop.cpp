@@ -116,7 +116,10 @@ Drop drop_assembly(const geometry::CloudBins& bins, double x, double y, const To
   double floor = -std::numeric_limits<double>::infinity();
   // Only points that would lift the tool above the cutter's own drop matter: the queries read no
   // block lower than that (less a margin for the rounding of the sums, so the result is exact).
-  const auto lifting = [&](double height) { return std::max(d.tip, floor) + height - 1e-9 * (1 + std::abs(d.tip) + height); };
+  const auto lifting = [&](double height) {
+    const double base = std::max(d.tip, floor);
+    return base + height - 1e-9 * (1 + (std::isfinite(base) ? std::abs(base) : 0.0) + height);
+  };
   if (tool.shank() > tool.cutter.radius) floor = std::max(floor, bins.max_z_within(x, y, tool.shank(), lifting(tool.flutes())) - tool.flutes());
   if (tool.has_holder() && tool.holder_radius > tool.cutter.radius)
     floor = std::max(floor, bins.max_z_within(x, y, tool.holder_radius, lifting(tool.gauge_length)) - tool.gauge_length);

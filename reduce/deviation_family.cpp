@@ -132,7 +132,13 @@ void DeviationFamily::add_measured(const std::filesystem::path& csv, double nomi
         std::array<std::uint32_t, 4> index{};
         std::array<double, 4> d2{};
         const std::size_t found = tree.knnSearch(query, index.size(), index.data(), d2.data());
-        if (d2[0] < 1e-18) return pts[index[0]].z();
+        // At a measured point: its value (the mean, where the point was measured more than once).
+        if (d2[0] < 1e-18) {
+          double sum = 0;
+          int at = 0;
+          for (std::size_t k = 0; k < found && d2[k] < 1e-18; ++k) sum += pts[index[k]].z(), ++at;
+          return sum / at;
+        }
         double w = 0, v = 0;
         for (std::size_t k = 0; k < found; ++k) w += 1 / d2[k], v += pts[index[k]].z() / d2[k];
         return v / w;

@@ -49,7 +49,8 @@ class DeviationFamily {
   void add_tilt(char axis, const DeviationRange& angle);  // radians (small)
   void add_seed_parametric(const DeviationRange& a, const DeviationRange& b);  // eq. 2.20
   // A measured surface: CSV lines "x,y,z" (a header line is allowed), deviation from the nominal
-  // altitude, inverse-distance interpolated onto the grid from the 4 nearest points. Throws
+  // altitude, inverse-distance interpolated onto the grid from the 4 nearest points (at a point
+  // measured more than once, the mean of its measurements). Throws
   // InputError naming the file and line.
   void add_measured(const std::filesystem::path& csv, double nominal_z = 0);
   void add(const std::string& label, const Eigen::VectorXd& values);

@@ -67,7 +67,7 @@ TEST(CopyCommand, DomeIsCopiedByPacketsWithItsOutputs) {
   for (const auto& p : s["packets"]) {
     EXPECT_EQ(p["roughing"]["check"]["positions_over_tolerance"].get<long long>(), 0);
     EXPECT_EQ(p["finishing"]["check"]["positions_over_tolerance"].get<long long>(), 0);
-    EXPECT_LE(p["finishing"]["check"]["deepest_mm"].get<double>(), 0.01);  // the chord tolerance
+    EXPECT_LE(p["finishing"]["check"]["deepest_mm"].get<double>(), 0.01 + 1e-9);  // the chord tolerance, as the check allows it
     EXPECT_GT(p["finishing"]["cycle_time_s"].get<double>(), 0);
   }
   EXPECT_NE(r.output.find("packets"), std::string::npos);

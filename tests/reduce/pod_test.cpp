@@ -132,6 +132,16 @@ TEST(DeviationFamily, MeasuredSurfacesJoinTheFamilyAndBadFilesAreNamed) {
   EXPECT_THROW(family.add_measured(csv), drom::InputError);
 }
 
+TEST(DeviationFamily, APointMeasuredTwiceGivesTheMeanOfItsMeasurements) {
+  const auto csv = std::filesystem::temp_directory_path() / "drom_measured_twice.csv";
+  std::ofstream(csv) << "0,0,1\n0,0,3\n100,0,0\n0,100,0\n100,100,0\n";
+  drom::reduce::DeviationFamily family(drom::reduce::DeviationGrid{0, 100, 0, 100, 2, 2});
+  family.add_measured(csv);
+  std::filesystem::remove(csv);
+  EXPECT_DOUBLE_EQ(family.snapshots()(family.grid().index(0, 0), 0), 2.0);
+  EXPECT_DOUBLE_EQ(family.snapshots()(family.grid().index(1, 1), 0), 0.0);
+}
+
 TEST(DeviationFamily, AScanOfManyPointsIsInterpolatedFromItsFourNearestAsAFullSearchWould) {
   // A scattered scan (not on the grid, so every grid value is a weighted mean of 4 neighbours):
   // each value must equal the inverse-distance mean over the 4 nearest found by checking every point.
