@@ -207,7 +207,7 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
   struct ChordTests {
     double spacing, tolerance;
   };
-  const double least_cos = std::max(0.1, std::cos(s.steepest * std::numbers::pi / 180));
+  const double least_cos = std::max(0.1, steepest);
   const auto chord_tests = [&](const Node& a, const Node& b) -> ChordTests {
     const double r = cutter.corner_radius;
     if (!(r > 0)) return {check, s.chord_tolerance};
