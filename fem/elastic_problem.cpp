@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 #include <stdexcept>
 
 namespace drom::fem {
@@ -38,7 +39,7 @@ Eigen::SparseMatrix<double> ElasticProblem::assemble_stiffness(const std::vector
   return K;
 }
 
-void ElasticProblem::hold(Eigen::SparseMatrix<double>& K, const std::vector<char>& held) const {
+double ElasticProblem::hold(Eigen::SparseMatrix<double>& K, const std::vector<char>& held) const {
   // Unit-scaled diagonal keeps the held block as well conditioned as the rest.
   double diag_sum = 0;
   int diag_count = 0;
@@ -51,6 +52,7 @@ void ElasticProblem::hold(Eigen::SparseMatrix<double>& K, const std::vector<char
   for (int c = 0; c < K.outerSize(); ++c)
     for (Eigen::SparseMatrix<double>::InnerIterator it(K, c); it; ++it)
       if (held[static_cast<std::size_t>(it.row())] || held[static_cast<std::size_t>(c)]) it.valueRef() = it.row() == c ? scale : 0.0;
+  return scale;
 }
 
 void ElasticProblem::equilibrate(const std::vector<int>& isostatic_dofs) {
@@ -137,8 +139,7 @@ std::vector<char> ElasticProblem::live_nodes() const {
   return live;
 }
 
-void ElasticProblem::assemble_and_factorize() {
-  K_ = assemble_stiffness(activity_);
+std::vector<char> ElasticProblem::held_dofs() {
   const auto live = live_nodes();
   orphan_.assign(static_cast<std::size_t>(mesh_.dof_count()), 0);
   std::vector<char> held(static_cast<std::size_t>(mesh_.dof_count()), 0);
@@ -146,8 +147,96 @@ void ElasticProblem::assemble_and_factorize() {
     if (!live[static_cast<std::size_t>(n)])
       for (int c = 0; c < 3; ++c) orphan_[static_cast<std::size_t>(3 * n + c)] = held[static_cast<std::size_t>(3 * n + c)] = 1;
   for (int d : fixed_dofs_) held[static_cast<std::size_t>(d)] = 1;
-  hold(K_, held);
+  return held;
+}
+
+void ElasticProblem::assemble_held() {
+  K_ = assemble_stiffness(activity_);
+  anchor_scale_ = hold(K_, held_dofs());
+}
+
+void ElasticProblem::assemble_and_factorize() {
+  assemble_held();
   solver_.factorize(K_);
+  block_current_ = false;
+}
+
+void ElasticProblem::assemble_and_factorize_anchor(const std::vector<char>& changing_elements) {
+  if (static_cast<int>(changing_elements.size()) != mesh_.element_count())
+    throw std::invalid_argument("assemble_and_factorize_anchor: one flag per element");
+  assemble_held();
+  if (base_ordering_.empty()) base_ordering_ = fill_reducing_ordering(K_);
+  changing_ = changing_elements;
+  block_index_.assign(static_cast<std::size_t>(mesh_.dof_count()), -1);
+  std::vector<int> block;
+  for (int e = 0; e < mesh_.element_count(); ++e)
+    if (changing_[static_cast<std::size_t>(e)])
+      for (int n : mesh_.element(e))
+        for (int c = 0; c < 3; ++c) block_index_[static_cast<std::size_t>(3 * n + c)] = 0;
+  for (int d = 0; d < mesh_.dof_count(); ++d)
+    if (block_index_[static_cast<std::size_t>(d)] == 0) {
+      block_index_[static_cast<std::size_t>(d)] = static_cast<int>(block.size());
+      block.push_back(d);
+    }
+  if (!block_) block_ = std::make_unique<TrailingBlockCholesky>();
+  ++block_stats_.anchors;
+  block_stats_.block_dofs += static_cast<long long>(block.size());
+  const double seconds_before = block_->anchor_seconds();
+  // A later station refactorizes S (m^3 / 3 flops) and solves around it; past a quarter of a full
+  // factorization's flops the block would not pay.
+  const double m = static_cast<double>(block.size());
+  block_current_ = block_->factorize_anchor(K_, block, base_ordering_, [&](double full_flops) { return m * m * m / 3 <= 0.25 * full_flops; });
+  block_stats_.anchor_seconds += block_->anchor_seconds() - seconds_before;
+  if (!block_current_) {
+    ++block_stats_.full_chunks;
+    solver_.factorize(K_);
+    return;
+  }
+  anchor_activity_ = activity_;
+}
+
+void ElasticProblem::refactorize_changed() {
+  if (!block_current_) {
+    assemble_and_factorize();
+    return;
+  }
+  for (int e = 0; e < mesh_.element_count(); ++e)
+    if (activity_[static_cast<std::size_t>(e)] != anchor_activity_[static_cast<std::size_t>(e)] && !changing_[static_cast<std::size_t>(e)])
+      throw std::logic_error("refactorize_changed: element " + std::to_string(e) + " changed outside the anchor's block");
+  // S = the anchor's + sum over changed elements of (a - a_anchor) K_e on the block; then the held
+  // dofs' rows and columns as the full assembly holds them (orphans appear as material goes).
+  Eigen::MatrixXd S = block_->anchor_schur();
+  for (int e = 0; e < mesh_.element_count(); ++e) {
+    const double delta = activity_[static_cast<std::size_t>(e)] - anchor_activity_[static_cast<std::size_t>(e)];
+    if (delta == 0) continue;
+    const auto nodes = mesh_.element(e);
+    const Eigen::MatrixXd& Ke = operators_.stiffness(e);
+    for (std::size_t a = 0; a < 3 * nodes.size(); ++a) {
+      const int i = block_index_[static_cast<std::size_t>(3 * nodes[a / 3] + static_cast<int>(a % 3))];
+      for (std::size_t b = 0; b < 3 * nodes.size(); ++b) {
+        const int j = block_index_[static_cast<std::size_t>(3 * nodes[b / 3] + static_cast<int>(b % 3))];
+        S(i, j) += delta * Ke(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
+      }
+    }
+  }
+  const auto held = held_dofs();
+  for (int d : block_->block()) {
+    if (!held[static_cast<std::size_t>(d)]) continue;
+    const int i = block_index_[static_cast<std::size_t>(d)];
+    S.row(i).setZero();
+    S.col(i).setZero();
+    S(i, i) = anchor_scale_;
+  }
+  const double seconds_before = block_->refactorize_seconds();
+  const bool positive = block_->refactorize(S);
+  block_stats_.refactorize_seconds += block_->refactorize_seconds() - seconds_before;
+  if (!positive) {
+    // Round-off cannot make S indefinite where the full matrix is not: leave it to the full
+    // factorization to say which it is.
+    assemble_and_factorize();
+    return;
+  }
+  ++block_stats_.block_refactorizations;
 }
 
 Eigen::MatrixXd ElasticProblem::element_load(int e) {
@@ -173,7 +262,46 @@ Eigen::MatrixXd ElasticProblem::solve() {
   for (int d = 0; d < mesh_.dof_count(); ++d)
     if (orphan_[static_cast<std::size_t>(d)]) F.row(d).setZero();
   for (int d : fixed_dofs_) F.row(d).setZero();
+  Eigen::MatrixXd U = solve_by_group(F);
+  if (!block_current_) {
+    if (measure_full_residual_) block_stats_.worst_full_residual = std::max(block_stats_.worst_full_residual, relative_residual(F, U));
+    return U;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const double residual = relative_residual(F, U);
+  block_stats_.residual_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (residual <= residual_bound_) {
+    block_stats_.worst_residual = std::max(block_stats_.worst_residual, residual);
+    return U;
+  }
+  ++block_stats_.residual_fallbacks;
+  assemble_and_factorize();
   return solve_by_group(F);
+}
+
+double ElasticProblem::relative_residual(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U) {
+  // After a block refactorization K is the anchor's K_ plus the changed elements' (a - a_anchor) K_e;
+  // held rows are F's zeros.
+  Eigen::MatrixXd R = F;
+  R.noalias() -= K_.selfadjointView<Eigen::Lower>() * U;
+  for (int e = 0; block_current_ && e < mesh_.element_count(); ++e) {
+    const double delta = activity_[static_cast<std::size_t>(e)] - anchor_activity_[static_cast<std::size_t>(e)];
+    if (delta == 0) continue;
+    const auto nodes = mesh_.element(e);
+    Eigen::MatrixXd ue(3 * static_cast<Eigen::Index>(nodes.size()), U.cols());
+    for (std::size_t a = 0; a < nodes.size(); ++a) ue.middleRows<3>(3 * static_cast<Eigen::Index>(a)) = U.middleRows<3>(3 * nodes[a]);
+    const Eigen::MatrixXd fe = delta * (operators_.stiffness(e) * ue);
+    for (std::size_t a = 0; a < nodes.size(); ++a) R.middleRows<3>(3 * nodes[a]) -= fe.middleRows<3>(3 * static_cast<Eigen::Index>(a));
+  }
+  for (int d = 0; d < mesh_.dof_count(); ++d)
+    if (orphan_[static_cast<std::size_t>(d)]) R.row(d).setZero();
+  for (int d : fixed_dofs_) R.row(d).setZero();
+  double worst = 0;
+  for (Eigen::Index p = 0; p < F.cols(); ++p) {
+    const double f = F.col(p).norm(), r = R.col(p).norm();
+    worst = std::max(worst, f > 0 ? r / f : (r > 0 ? std::numeric_limits<double>::infinity() : 0.0));
+  }
+  return worst;
 }
 
 void ElasticProblem::set_profile_groups(std::vector<int> sizes) {
@@ -197,9 +325,16 @@ Eigen::MatrixXd ElasticProblem::stress_load(int e) const {
 }
 
 Eigen::MatrixXd ElasticProblem::solve_by_group(const Eigen::MatrixXd& rhs) {
-  if (group_sizes_.size() == 1) return solver_.solve(rhs);  // no copy of the right-hand sides
+  auto solve = [&](const Eigen::MatrixXd& b) -> Eigen::MatrixXd {
+    if (!block_current_) return solver_.solve(b);
+    const double seconds_before = block_->solve_seconds();
+    Eigen::MatrixXd x = block_->solve(b);
+    block_stats_.solve_seconds += block_->solve_seconds() - seconds_before;
+    return x;
+  };
+  if (group_sizes_.size() == 1) return solve(rhs);  // no copy of the right-hand sides
   Eigen::MatrixXd u(rhs.rows(), rhs.cols());
-  for_each_group([&](Eigen::Index first, Eigen::Index n) { u.middleCols(first, n) = solver_.solve(rhs.middleCols(first, n)); });
+  for_each_group([&](Eigen::Index first, Eigen::Index n) { u.middleCols(first, n) = solve(rhs.middleCols(first, n)); });
   return u;
 }
 

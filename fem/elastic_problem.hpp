@@ -14,15 +14,29 @@
 #include "fem/residual_stress.hpp"
 #include "fem/spd_solver.hpp"
 #include "fem/stiffness_pattern.hpp"
+#include "fem/trailing_block_cholesky.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
 
 namespace drom::fem {
+
+// What the block refactorization (assemble_and_factorize_anchor / refactorize_changed) did.
+struct BlockStats {
+  int anchors = 0;               // factorizations with a block eliminated last
+  int block_refactorizations = 0;  // stations that refactorized only their block
+  int full_chunks = 0;           // anchors whose block was too large to pay: factorized in full instead
+  int residual_fallbacks = 0;    // block solves whose residual failed the bound: solved again in full
+  long long block_dofs = 0;      // summed over anchors
+  double anchor_seconds = 0, refactorize_seconds = 0, solve_seconds = 0, residual_seconds = 0;
+  double worst_residual = 0;     // of the block solves that were kept
+  double worst_full_residual = 0;  // of the full solves, when measured (measure_full_residuals)
+};
 
 class ElasticProblem {
  public:
@@ -52,6 +66,21 @@ class ElasticProblem {
   void set_fixed_dofs(std::vector<int> dofs);
   // Step 3.
   void assemble_and_factorize();
+  // Step 3 for the first of a run of stations whose later changes stay inside `changing_elements`
+  // (one flag per element): factorizes this state with those elements' dofs eliminated last
+  // (fem/trailing_block_cholesky.hpp), so that each later station of the run only refactorizes that
+  // block (refactorize_changed). When the block's dense refactorization would cost more than a
+  // quarter of a full one, factorizes in full instead, and the run's stations do too.
+  void assemble_and_factorize_anchor(const std::vector<char>& changing_elements);
+  // Step 3 for a later station of that run. The activity may differ from the anchor's only on the
+  // changing elements (std::logic_error otherwise). Without an anchor: assemble_and_factorize().
+  void refactorize_changed();
+  // A block solve whose relative residual max_p ||K u_p - f_p|| / ||f_p|| exceeds this is thrown
+  // away: the station is factorized in full and solved again (and so is the rest of its run).
+  void set_residual_bound(double bound) { residual_bound_ = bound; }
+  const BlockStats& block_stats() const { return block_stats_; }
+  // Also measure the residual of full solves (one more sparse product each), for comparison.
+  void measure_full_residuals(bool on) { measure_full_residual_ = on; }
   // Step 4: displacement since the equilibrated, clamped stock; ndof x profiles. Held dofs are zero.
   Eigen::MatrixXd solve();
 
@@ -72,7 +101,7 @@ class ElasticProblem {
   std::vector<Vector6d> element_stresses(int p, const Eigen::VectorXd& u) const;
 
   const SolverStats& solver_stats() const { return solver_.stats(); }
-  // The stiffness factorized by the last assemble_and_factorize() (lower triangle, held dofs).
+  // The stiffness factorized by the last assemble_and_factorize() or anchor (lower triangle, held dofs).
   const Eigen::SparseMatrix<double>& stiffness() const { return K_; }
   double assembly_seconds() const { return assembly_seconds_; }
   Eigen::Index unknowns() const { return static_cast<Eigen::Index>(mesh_.dof_count()); }
@@ -87,7 +116,13 @@ class ElasticProblem {
   void for_each_group(F&& f) const {
     for (Eigen::Index first = 0; Eigen::Index n : group_sizes_) f(first, n), first += n;
   }
-  void hold(Eigen::SparseMatrix<double>& K, const std::vector<char>& held) const;
+  // Zeroes the held dofs' rows and columns and gives them the mean diagonal of the others (returned).
+  double hold(Eigen::SparseMatrix<double>& K, const std::vector<char>& held) const;
+  // K_ at the current activity, held; orphan_ updated.
+  void assemble_held();
+  std::vector<char> held_dofs();  // orphans (from the activity) and fixed dofs; updates orphan_
+  // max_p ||K u_p - f_p|| / ||f_p|| of the current K.
+  double relative_residual(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U);
   Eigen::VectorXd gather(int e, const Eigen::VectorXd& u) const;
 
   const Mesh& mesh_;
@@ -97,6 +132,17 @@ class ElasticProblem {
   ElementOperators operators_;
   StiffnessPattern pattern_;
   SpdSolver solver_;
+  // The block refactorization: the anchor's state and its factor.
+  std::unique_ptr<TrailingBlockCholesky> block_;
+  bool block_current_ = false;  // the last factorization is the block one
+  std::vector<int> base_ordering_;  // fill-reducing order of the pattern, computed once
+  std::vector<char> changing_;      // per element, of the current run
+  std::vector<int> block_index_;    // per dof: its index in the block, or -1
+  std::vector<double> anchor_activity_;
+  double anchor_scale_ = 1;
+  double residual_bound_ = 1e-9;
+  bool measure_full_residual_ = false;
+  BlockStats block_stats_;
 
   std::vector<double> activity_;
   std::vector<int> fixed_dofs_;

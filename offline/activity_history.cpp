@@ -27,6 +27,14 @@ void ActivityHistory::advance(std::size_t k, std::vector<double>& fractions) con
   for (auto i = offsets_[k]; i < offsets_[k + 1]; ++i) fractions[static_cast<std::size_t>(changed_[i])] = value_[i];
 }
 
+std::vector<char> ActivityHistory::changing(std::size_t first, std::size_t last) const {
+  if (first > last || last > stations()) throw std::out_of_range("ActivityHistory: stations " + std::to_string(first) + " to " + std::to_string(last));
+  std::vector<char> flags(elements_, 0);
+  for (std::size_t k = first + 1; k < last; ++k)
+    for (auto i = offsets_[k]; i < offsets_[k + 1]; ++i) flags[static_cast<std::size_t>(changed_[i])] = 1;
+  return flags;
+}
+
 std::vector<double> ActivityHistory::at(std::size_t k) const {
   std::vector<double> fractions;
   for (std::size_t j = 0; j <= k; ++j) advance(j, fractions);

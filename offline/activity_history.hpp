@@ -22,6 +22,9 @@ class ActivityHistory {
   std::vector<double> at(std::size_t k) const;
   // Station k - 1's fractions moved on to station k's (k = 0: from the intact stock).
   void advance(std::size_t k, std::vector<double>& fractions) const;
+  // One flag per element: whether stations first + 1 .. last - 1 change it (what a run of stations
+  // first .. last - 1 changes after its first).
+  std::vector<char> changing(std::size_t first, std::size_t last) const;
   // Element changes stored over all stations.
   std::size_t changes() const { return changed_.size(); }
 

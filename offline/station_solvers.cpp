@@ -28,15 +28,28 @@ void remove_rigid_motions(const fem::Mesh& mesh, const std::vector<char>& live, 
 
 class FeStation final : public StationSolver {
  public:
-  FeStation(const PartModel& part, const std::vector<fem::StressProfile>& profiles, const std::vector<int>& clamped, const fem::ElasticProblem& base)
+  FeStation(const PartModel& part, const std::vector<fem::StressProfile>& profiles, const std::vector<int>& clamped, const fem::ElasticProblem& base,
+            double residual_bound)
       : part_(part), profiles_(profiles), base_(base), clamped_(part.mesh, part.shape, part.material, profiles) {
     clamped_.adopt_equilibrium(base);
     clamped_.set_fixed_dofs(clamped);
+    clamped_.set_residual_bound(residual_bound);
   }
 
-  Eigen::MatrixXd solve(const std::vector<double>& activity, bool) override {
+  void start_chunk(const std::vector<char>& changing_elements) override {
+    changing_ = changing_elements;
+    anchor_next_ = true;
+  }
+
+  Eigen::MatrixXd solve(const std::vector<double>& activity, bool follows_previous) override {
     clamped_.set_activity(activity);
-    clamped_.assemble_and_factorize();
+    if (anchor_next_)
+      clamped_.assemble_and_factorize_anchor(changing_);
+    else if (follows_previous)
+      clamped_.refactorize_changed();
+    else
+      clamped_.assemble_and_factorize();
+    anchor_next_ = false;
     last_ = &clamped_;
     return clamped_.solve();
   }
@@ -62,10 +75,21 @@ class FeStation final : public StationSolver {
   }
 
   nlohmann::json statistics() const override {
+    const auto& b = clamped_.block_stats();
     nlohmann::json s{{"assembly_s", clamped_.assembly_seconds()},
                      {"analyze_s", clamped_.solver_stats().analyze_seconds},
                      {"factorize_s", clamped_.solver_stats().factorize_seconds},
-                     {"factorizations", clamped_.solver_stats().factorizations}};
+                     {"factorizations", clamped_.solver_stats().factorizations},
+                     {"block", {{"anchors", b.anchors},
+                                {"block_dofs", b.block_dofs},
+                                {"block_refactorizations", b.block_refactorizations},
+                                {"full_chunks", b.full_chunks},
+                                {"residual_fallbacks", b.residual_fallbacks},
+                                {"anchor_s", b.anchor_seconds},
+                                {"refactorize_s", b.refactorize_seconds},
+                                {"solve_s", b.solve_seconds},
+                                {"residual_s", b.residual_seconds},
+                                {"worst_residual", b.worst_residual}}}};
     if (free_) accumulate(s, {{"factorize_s", free_->solver_stats().factorize_seconds}, {"factorizations", free_->solver_stats().factorizations}});
     return s;
   }
@@ -75,15 +99,22 @@ class FeStation final : public StationSolver {
   const std::vector<fem::StressProfile>& profiles_;
   const fem::ElasticProblem& base_;
   fem::ElasticProblem clamped_;
+  std::vector<char> changing_;
+  bool anchor_next_ = false;
   std::unique_ptr<fem::ElasticProblem> free_;
   const fem::ElasticProblem* last_ = nullptr;
 };
 
 class FeSolvers final : public StationSolvers {
  public:
-  FeSolvers(const PartModel& part, const std::vector<fem::StressProfile>& profiles, const std::vector<int>& clamped, const std::vector<int>& groups,
-            std::string_view equilibrium)
-      : part_(part), profiles_(profiles), clamped_(clamped), base_(part.mesh, part.shape, part.material, profiles) {
+  FeSolvers(const cases::Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles, const std::vector<int>& clamped,
+            const std::vector<int>& groups, std::string_view equilibrium)
+      : part_(part),
+        profiles_(profiles),
+        clamped_(clamped),
+        chunk_(static_cast<std::size_t>(c.stations_per_factorization)),
+        residual_bound_(c.residual_bound),
+        base_(part.mesh, part.shape, part.material, profiles) {
     if (!groups.empty()) base_.set_profile_groups(groups);
     if (!equilibrium.empty())
       base_.adopt_equilibrium(equilibrium);
@@ -91,14 +122,18 @@ class FeSolvers final : public StationSolvers {
       base_.equilibrate(fem::isostatic_dofs(part.mesh, part.shape, std::vector<char>(static_cast<std::size_t>(part.mesh.node_count()), 1)));
   }
   std::string equilibrium() const override { return base_.equilibrium_bytes(); }
-  std::unique_ptr<StationSolver> make_worker() const override { return std::make_unique<FeStation>(part_, profiles_, clamped_, base_); }
-  std::size_t chunk() const override { return 1; }
+  std::unique_ptr<StationSolver> make_worker() const override {
+    return std::make_unique<FeStation>(part_, profiles_, clamped_, base_, residual_bound_);
+  }
+  std::size_t chunk() const override { return chunk_; }
   nlohmann::json equilibrium_statistics() const override { return {{"factorize_s", base_.solver_stats().factorize_seconds}}; }
 
  private:
   const PartModel& part_;
   std::vector<fem::StressProfile> profiles_;
   std::vector<int> clamped_;
+  std::size_t chunk_;
+  double residual_bound_;
   fem::ElasticProblem base_;
 };
 
@@ -230,7 +265,7 @@ std::unique_ptr<StationSolvers> StationSolvers::create(const cases::Case& c, con
                                                        const std::vector<int>& clamped, const std::vector<int>& groups, std::string_view equilibrium) {
   // The PGD solves every profile on its own already.
   if (c.solver == "pgd") return std::make_unique<PgdSolvers>(c, part, profiles, clamped);
-  return std::make_unique<FeSolvers>(part, profiles, clamped, groups, equilibrium);
+  return std::make_unique<FeSolvers>(c, part, profiles, clamped, groups, equilibrium);
 }
 
 }  // namespace drom::offline

@@ -26,6 +26,10 @@ class StationSolver {
   // the clamped part with these remaining fractions. `follows_previous`: the last call solved the
   // previous station, so its solution may seed this one.
   virtual Eigen::MatrixXd solve(const std::vector<double>& activity, bool follows_previous) = 0;
+  // Before the first station of a chunk: the elements the chunk's later stations change (one flag per
+  // element). The FE factorizes the first station with their dofs last, and the later ones refactorize
+  // only those (fem/trailing_block_cholesky.hpp).
+  virtual void start_chunk(const std::vector<char>& changing_elements) { (void)changing_elements; }
   // The unclamped part's shape with these remaining fractions, after best-fit rigid alignment; dofs of
   // nodes that no material holds are 0.
   virtual Eigen::MatrixXd free_shape(const std::vector<double>& activity) = 0;
@@ -49,9 +53,11 @@ class StationSolvers {
                                                 const std::vector<int>& clamped, const std::vector<int>& groups = {},
                                                 std::string_view equilibrium = {});
   virtual std::unique_ptr<StationSolver> make_worker() const = 0;
-  // Stations a worker takes at a time and solves in order: the FE solves each station on its own (1);
-  // the PGD warm-starts each station from the previous one within a chunk. Chunks start cold, so the
-  // results do not depend on the thread count nor on where a run was interrupted.
+  // Stations a worker takes at a time and solves in order: the FE factorizes a chunk's first station
+  // and refactorizes only what the tool changes at the others (solver.stations_per_factorization,
+  // 1: a full factorization per station); the PGD warm-starts each station from the previous one.
+  // Chunks start cold, so the results do not depend on the thread count nor on where a run was
+  // interrupted.
   virtual std::size_t chunk() const = 0;
   virtual nlohmann::json equilibrium_statistics() const = 0;
   // The equilibrated stock as bytes for create(); empty when the solver cannot hand it over (the PGD's

@@ -1,0 +1,116 @@
+// Issue 28: a case's offline stations solved by full refactorization (what drom did before) and by the
+// block refactorization (fem/trailing_block_cholesky.hpp: one factorization per chunk of stations
+// with the chunk's machined dofs eliminated last, then only that dense block per station), on the
+// same consecutive stations, in the same run, on one thread with single-threaded BLAS (one drom
+// offline worker). The case is set up as drom offline does (mesh, clamps, toolpath, removal, unit
+// profiles). Prints JSON.
+//   build/bench/station_update_bench CASE.toml [--set key=value]... [--stations 32] [--chunk 16]
+// e.g. the quick flat plate:
+//   build/bench/station_update_bench cases/flat_plate.toml --set mesh.nx=20 --set mesh.ny=20 --set path.station_spacing=100
+#include "case/case.hpp"
+#include "fem/elastic_problem.hpp"
+#include "fem/supports.hpp"
+#include "offline/machining_run.hpp"
+#include "offline/part_setup.hpp"
+#include "support/kernel_threads.hpp"
+#include "support/resources.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+using namespace drom;
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: station_update_bench CASE.toml [--set key=value]... [--stations N] [--chunk C]\n");
+    return 2;
+  }
+  std::vector<std::string> overrides;
+  int wanted = 32, chunk = 16;
+  for (int i = 2; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--set")) overrides.emplace_back(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--stations")) wanted = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--chunk")) chunk = std::atoi(argv[i + 1]);
+  }
+  const SingleThreadedKernels single_threaded_kernels;  // as a drom offline worker
+  const cases::Case c = cases::load_case(std::string(argv[1]), overrides);
+  const offline::PartModel part = offline::build_part(c);
+  const auto clamped = offline::clamp_dofs(c, part);
+  offline::MachiningRun run(c, part);
+  std::vector<std::vector<double>> history;
+  std::vector<double> remaining(static_cast<std::size_t>(part.mesh.element_count()), 1.0);
+  for (std::size_t k = 0; k < run.stations().size() && static_cast<int>(k) < wanted; ++k) {
+    run.advance(remaining);
+    history.push_back(remaining);
+  }
+
+  const auto profiles = fem::unit_profiles(part.degrees);
+  fem::ElasticProblem full(part.mesh, part.shape, part.material, profiles), block(part.mesh, part.shape, part.material, profiles);
+  full.equilibrate(fem::isostatic_dofs(part.mesh, part.shape, std::vector<char>(static_cast<std::size_t>(part.mesh.node_count()), 1)));
+  block.adopt_equilibrium(full);
+  full.set_fixed_dofs(clamped);
+  block.set_fixed_dofs(clamped);
+  block.set_residual_bound(c.residual_bound);
+  full.measure_full_residuals(true);
+
+  // The database's rows: the z displacement of the top face's nodes (drom offline's B1_top).
+  std::vector<Eigen::Index> top;
+  for (int node = 0; node < part.mesh.node_count(); ++node)
+    if (part.shape.to_parametric(part.mesh.nodes[static_cast<std::size_t>(node)]).z() > part.shape.thickness() - 1e-9) top.push_back(3 * node + 2);
+  const auto P = static_cast<Eigen::Index>(profiles.size());
+  Eigen::VectorXd database_max = Eigen::VectorXd::Zero(P), database_diff = database_max;
+  double full_s = 0, block_s = 0, worst_refactorized = 0, worst_anchor = 0;
+  for (std::size_t k = 0; k < history.size(); ++k) {
+    auto t = std::chrono::steady_clock::now();
+    full.set_activity(history[k]);
+    full.assemble_and_factorize();
+    const Eigen::MatrixXd U = full.solve();
+    full_s += seconds_since(t);
+
+    const bool anchor = k % static_cast<std::size_t>(chunk) == 0;
+    t = std::chrono::steady_clock::now();
+    block.set_activity(history[k]);
+    if (anchor) {
+      // What the chunk's later stations change (material only goes: first against last).
+      const std::size_t last = std::min(history.size(), k + static_cast<std::size_t>(chunk)) - 1;
+      std::vector<char> changing(history[k].size(), 0);
+      for (std::size_t e = 0; e < changing.size(); ++e) changing[e] = history[k][e] != history[last][e];
+      block.assemble_and_factorize_anchor(changing);
+    } else {
+      block.refactorize_changed();
+    }
+    const Eigen::MatrixXd X = block.solve();
+    block_s += seconds_since(t);
+
+    for (Eigen::Index p = 0; p < P; ++p) {
+      double& worst = anchor ? worst_anchor : worst_refactorized;
+      worst = std::max(worst, (X.col(p) - U.col(p)).cwiseAbs().maxCoeff() / U.col(p).cwiseAbs().maxCoeff());
+      for (Eigen::Index row : top) {
+        database_max(p) = std::max(database_max(p), std::abs(U(row, p)));
+        database_diff(p) = std::max(database_diff(p), std::abs(X(row, p) - U(row, p)));
+      }
+    }
+  }
+  const auto& b = block.block_stats();
+  const double ns = static_cast<double>(history.size());
+  std::printf("{\n  \"case\": \"%s\",\n  \"unknowns\": %d,\n  \"stations\": %zu,\n  \"chunk\": %d,\n  \"profiles\": %lld,\n", c.name.c_str(), part.mesh.dof_count(),
+              history.size(), chunk, static_cast<long long>(P));
+  std::printf("  \"full_s_per_station\": %.4f,\n  \"block_s_per_station\": %.4f,\n  \"speedup\": %.2f,\n", full_s / ns, block_s / ns, full_s / block_s);
+  std::printf("  \"block\": {\"anchors\": %d, \"mean_block_dofs\": %.0f, \"refactorizations\": %d, \"full_chunks\": %d, \"residual_fallbacks\": %d,\n", b.anchors,
+              static_cast<double>(b.block_dofs) / std::max(1, b.anchors), b.block_refactorizations, b.full_chunks, b.residual_fallbacks);
+  std::printf("            \"anchor_s\": %.3f, \"refactorize_s\": %.3f, \"solve_s\": %.3f, \"residual_s\": %.3f},\n", b.anchor_seconds, b.refactorize_seconds,
+              b.solve_seconds, b.residual_seconds);
+  std::printf("  \"worst_residual\": {\"block\": %.2e, \"full\": %.2e},\n", b.worst_residual, full.block_stats().worst_full_residual);
+  std::printf("  \"full_factor_flops\": %.3g,\n", full.solver_stats().factor_flops);
+  // Per profile, relative to its largest value: at the chunks' first stations the block path is a
+  // full factorization in another elimination order, which sets the round-off floor.
+  std::printf("  \"max_relative_difference\": {\"refactorized_stations\": %.2e, \"anchor_stations\": %.2e, \"database_top_z\": %.2e},\n",
+              worst_refactorized, worst_anchor, database_diff.cwiseQuotient(database_max).maxCoeff());
+  std::printf("  \"peak_memory_mb\": %.0f\n}\n", static_cast<double>(peak_memory_bytes()) / 1048576.0);
+  return 0;
+}

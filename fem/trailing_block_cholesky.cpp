@@ -1,0 +1,154 @@
+#include "fem/trailing_block_cholesky.hpp"
+
+#include "support/resources.hpp"
+
+#include <Eigen/CholmodSupport>
+
+#include <algorithm>
+#include <chrono>
+#include <iterator>
+#include <stdexcept>
+
+namespace drom::fem {
+
+struct TrailingBlockCholesky::Cholmod {
+  cholmod_common common;
+  cholmod_factor* factor = nullptr;
+  Cholmod() {
+    cholmod_start(&common);
+    // The order is ours (B last); CHOLMOD's postordering would move block columns that are not
+    // ancestors of the rest in front of it.
+    common.nmethods = 1;
+    common.method[0].ordering = CHOLMOD_NATURAL;
+    common.postorder = 0;
+    common.supernodal = CHOLMOD_SUPERNODAL;
+  }
+  ~Cholmod() {
+    if (factor) cholmod_free_factor(&factor, &common);
+    cholmod_finish(&common);
+  }
+};
+
+TrailingBlockCholesky::TrailingBlockCholesky() : cholmod_(std::make_unique<Cholmod>()) {}
+TrailingBlockCholesky::~TrailingBlockCholesky() = default;
+
+bool TrailingBlockCholesky::factorize_anchor(const Eigen::SparseMatrix<double>& K, std::span<const int> block, const std::vector<int>& ordering,
+                                             const std::function<bool(double)>& worthwhile) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Eigen::Index n = K.rows();
+  if (static_cast<Eigen::Index>(ordering.size()) != n) throw std::invalid_argument("TrailingBlockCholesky: the ordering must have one entry per dof");
+  std::vector<char> in_block(static_cast<std::size_t>(n), 0);
+  for (int d : block) {
+    if (d < 0 || d >= n || in_block[static_cast<std::size_t>(d)]) throw std::invalid_argument("TrailingBlockCholesky: block dofs must be distinct dofs of K");
+    in_block[static_cast<std::size_t>(d)] = 1;
+  }
+  block_.assign(block.begin(), block.end());
+  order_.clear();
+  order_.reserve(static_cast<std::size_t>(n));
+  for (int d : ordering)
+    if (!in_block[static_cast<std::size_t>(d)]) order_.push_back(d);
+  order_.insert(order_.end(), block_.begin(), block_.end());
+
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> position(n);
+  for (Eigen::Index k = 0; k < n; ++k) position.indices()[order_[static_cast<std::size_t>(k)]] = static_cast<int>(k);
+  Eigen::SparseMatrix<double> permuted(n, n);
+  permuted.selfadjointView<Eigen::Lower>() = K.selfadjointView<Eigen::Lower>().twistedBy(position);
+  cholmod_sparse A = Eigen::viewAsCholmod(permuted);
+  A.stype = -1;
+
+  auto& c = *cholmod_;
+  if (c.factor) cholmod_free_factor(&c.factor, &c.common);
+  c.factor = cholmod_analyze(&A, &c.common);
+  if (!c.factor) throw std::runtime_error("CHOLMOD: cannot analyze the stiffness pattern");
+  anchor_flops_ = c.common.fl;
+  anchor_nonzeros_ = c.common.lnz;
+  if (worthwhile && !worthwhile(anchor_flops_)) {
+    cholmod_free_factor(&c.factor, &c.common);
+    anchor_seconds_ += seconds_since(t0);
+    return false;
+  }
+  cholmod_factorize(&A, c.factor, &c.common);
+  if (c.common.status == CHOLMOD_NOT_POSDEF || c.factor->minor < c.factor->n)
+    throw std::runtime_error("stiffness matrix is not positive definite: the part is not held against rigid motion");
+  if (c.common.status != CHOLMOD_OK || !c.factor->is_super) throw std::runtime_error("CHOLMOD: the anchor factorization failed");
+  const int* perm = static_cast<const int*>(c.factor->Perm);
+  for (Eigen::Index k = 0; k < n; ++k)
+    if (perm[k] != k) throw std::logic_error("TrailingBlockCholesky: CHOLMOD reordered the given order");
+
+  // L_BB: the last m columns, read from the supernodes that hold them (each supernode's columns are
+  // stored dense, column-major, over its row pattern).
+  const Eigen::Index m = block_size(), first = n - m;
+  lower_bb_ = Eigen::MatrixXd::Zero(m, m);
+  const int* super = static_cast<const int*>(c.factor->super);
+  const int* pi = static_cast<const int*>(c.factor->pi);
+  const int* px = static_cast<const int*>(c.factor->px);
+  const int* rows = static_cast<const int*>(c.factor->s);
+  const double* x = static_cast<const double*>(c.factor->x);
+  for (std::size_t s = 0; s < c.factor->nsuper; ++s) {
+    const int c0 = super[s], c1 = super[s + 1], height = pi[s + 1] - pi[s];
+    for (int col = std::max(c0, static_cast<int>(first)); col < c1; ++col)
+      for (int r = col - c0; r < height; ++r)
+        lower_bb_(rows[pi[s] + r] - first, col - first) = x[px[s] + static_cast<std::ptrdiff_t>(col - c0) * height + r];
+  }
+  schur_anchor_ = lower_bb_.triangularView<Eigen::Lower>() * lower_bb_.transpose();
+  schur_.compute(schur_anchor_);
+  kept_.clear();
+  anchor_seconds_ += seconds_since(t0);
+  return true;
+}
+
+bool TrailingBlockCholesky::refactorize(const Eigen::MatrixXd& schur) {
+  if (schur.rows() != block_size() || schur.cols() != block_size()) throw std::invalid_argument("TrailingBlockCholesky: S must be m x m");
+  const auto t0 = std::chrono::steady_clock::now();
+  Eigen::LLT<Eigen::MatrixXd> next(schur);
+  refactorize_seconds_ += seconds_since(t0);
+  if (next.info() != Eigen::Success) return false;
+  schur_ = std::move(next);
+  return true;
+}
+
+Eigen::MatrixXd TrailingBlockCholesky::solve(const Eigen::MatrixXd& rhs) {
+  auto& c = *cholmod_;
+  if (!c.factor) throw std::logic_error("TrailingBlockCholesky::solve before factorize_anchor");
+  const auto t0 = std::chrono::steady_clock::now();
+  const Eigen::Index n = rhs.rows(), m = block_size(), first = n - m;
+  // With f = [f_R; f_B]:  y = L_RR^-1 f_R,  x_B = S^-1 (f_B - L_BR y),  x_R = L_RR^-T (y - L_BR^T x_B).
+  // A forward solve of [f_R; 0] with the whole L gives [y; -L_BB^-1 L_BR y], so L_BR y = -L_BB (its
+  // B part); a backward solve of [y; L_BB^T x_B] gives [x_R; x_B].
+  // Within a run of stations f_R rarely changes (removed material loads only its own dofs): the
+  // forward solve of the last f_R is kept and reused while f_R is bit for bit the same.
+  Eigen::MatrixXd f_r(first, rhs.cols());
+  for (Eigen::Index k = 0; k < first; ++k) f_r.row(k) = rhs.row(order_[static_cast<std::size_t>(k)]);
+  auto kept = std::find_if(kept_.begin(), kept_.end(), [&](const KeptForward& k) { return k.f_r.cols() == f_r.cols() && k.f_r == f_r; });
+  if (kept == kept_.end()) {
+    Eigen::MatrixXd b(n, rhs.cols());
+    b.topRows(first) = f_r;
+    b.bottomRows(m).setZero();
+    cholmod_dense forward_in = Eigen::viewAsCholmod(b);
+    cholmod_dense* forward = cholmod_solve(CHOLMOD_L, c.factor, &forward_in, &c.common);
+    if (!forward) throw std::runtime_error("CHOLMOD: the forward solve failed");
+    if (kept_.size() == 4) kept_.erase(kept_.begin());  // one per profile group, in practice
+    kept_.push_back({std::move(f_r), Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(forward->x), n, rhs.cols())});
+    cholmod_free_dense(&forward, &c.common);
+    kept = std::prev(kept_.end());
+    ++forward_solves_;
+  }
+  Eigen::MatrixXd y = kept->forward;
+  Eigen::MatrixXd f_b(m, rhs.cols());
+  for (Eigen::Index k = 0; k < m; ++k) f_b.row(k) = rhs.row(block_[static_cast<std::size_t>(k)]);
+  f_b += lower_bb_.triangularView<Eigen::Lower>() * y.bottomRows(m);
+  const Eigen::MatrixXd x_b = schur_.solve(f_b);
+  y.bottomRows(m) = lower_bb_.triangularView<Eigen::Lower>().transpose() * x_b;
+  cholmod_dense backward_in = Eigen::viewAsCholmod(y);
+  cholmod_dense* backward = cholmod_solve(CHOLMOD_Lt, c.factor, &backward_in, &c.common);
+  if (!backward) throw std::runtime_error("CHOLMOD: the backward solve failed");
+  const Eigen::Map<const Eigen::MatrixXd> z(static_cast<const double*>(backward->x), n, rhs.cols());
+  Eigen::MatrixXd x(n, rhs.cols());
+  for (Eigen::Index k = 0; k < first; ++k) x.row(order_[static_cast<std::size_t>(k)]) = z.row(k);
+  for (Eigen::Index k = 0; k < m; ++k) x.row(block_[static_cast<std::size_t>(k)]) = x_b.row(k);
+  cholmod_free_dense(&backward, &c.common);
+  solve_seconds_ += seconds_since(t0);
+  return x;
+}
+
+}  // namespace drom::fem

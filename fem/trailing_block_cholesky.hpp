@@ -1,0 +1,74 @@
+#pragma once
+// Cholesky of a stiffness whose later changes stay inside a known set of dofs, the block B (what the
+// tool will touch over the next stations). B is eliminated last, so the part of the factor that
+// eliminates the rest R never changes:
+//
+//   K = [K_RR  K_RB]   L = [L_RR   0  ]   S = K_BB - L_BR L_BR^T = L_BB L_BB^T (m x m, dense)
+//       [K_BR  K_BB]       [L_BR  L_BB]
+//
+// A change dK confined to B x B changes only S: the station refactorizes S + dK, m x m, instead of
+// the whole matrix, and a solve runs the anchor's sparse triangular factors around that dense one.
+// The answer is the full factorization's, with another elimination order's round-off.
+#include "fem/spd_solver.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include <functional>
+#include <memory>
+#include <span>
+#include <vector>
+
+namespace drom::fem {
+
+class TrailingBlockCholesky {
+ public:
+  TrailingBlockCholesky();
+  ~TrailingBlockCholesky();
+  TrailingBlockCholesky(const TrailingBlockCholesky&) = delete;
+  TrailingBlockCholesky& operator=(const TrailingBlockCholesky&) = delete;
+
+  // K: lower triangle. block: the dofs later changes may touch (any order; kept as given: block index
+  // b is dof block[b]). ordering: a fill-reducing order of K's pattern (fill_reducing_ordering); R
+  // keeps its relative order, B goes after it. After the symbolic analysis, `worthwhile` gets the
+  // factorization's flop count; if it says no, nothing is factorized and this returns false. Throws
+  // std::runtime_error if K is not positive definite.
+  bool factorize_anchor(const Eigen::SparseMatrix<double>& K, std::span<const int> block, const std::vector<int>& ordering,
+                        const std::function<bool(double flops)>& worthwhile = {});
+  // The Schur complement S of the anchor on B (block order): what refactorize() starts from.
+  const Eigen::MatrixXd& anchor_schur() const { return schur_anchor_; }
+  // The current matrix's S (the anchor's plus its change on B x B). Returns false, keeping the
+  // previous S, if it is not positive definite.
+  bool refactorize(const Eigen::MatrixXd& schur);
+  // Solves the current matrix for each column.
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& rhs);
+
+  Eigen::Index block_size() const { return static_cast<Eigen::Index>(block_.size()); }
+  const std::vector<int>& block() const { return block_; }
+  // Of the anchor factorization: CHOLMOD's flop count and nonzeros of L.
+  double anchor_flops() const { return anchor_flops_; }
+  double anchor_nonzeros() const { return anchor_nonzeros_; }
+  double anchor_seconds() const { return anchor_seconds_; }
+  double refactorize_seconds() const { return refactorize_seconds_; }
+  double solve_seconds() const { return solve_seconds_; }
+  int forward_solves() const { return forward_solves_; }
+
+ private:
+  struct Cholmod;
+  std::unique_ptr<Cholmod> cholmod_;
+  std::vector<int> order_;  // order_[k]: the dof eliminated k-th
+  std::vector<int> block_;
+  Eigen::MatrixXd lower_bb_;        // L_BB of the anchor
+  Eigen::MatrixXd schur_anchor_;    // L_BB L_BB^T
+  Eigen::LLT<Eigen::MatrixXd> schur_;  // of the current S
+  struct KeptForward {
+    Eigen::MatrixXd f_r, forward;  // f_R and the forward solve of [f_R; 0]
+  };
+  std::vector<KeptForward> kept_;
+  int forward_solves_ = 0;
+  double anchor_flops_ = 0, anchor_nonzeros_ = 0;
+  double anchor_seconds_ = 0, refactorize_seconds_ = 0, solve_seconds_ = 0;
+};
+
+}  // namespace drom::fem
