@@ -164,8 +164,9 @@ void ElasticProblem::assemble_and_factorize() {
 void ElasticProblem::assemble_and_factorize_anchor(const std::vector<char>& changing_elements) {
   if (static_cast<int>(changing_elements.size()) != mesh_.element_count())
     throw std::invalid_argument("assemble_and_factorize_anchor: one flag per element");
+  block_current_ = false;
   assemble_held();
-  if (base_ordering_.empty()) base_ordering_ = fill_reducing_ordering(K_);
+  if (base_ordering_.empty()) base_ordering_ = fill_reducing_ordering(K_, &full_flops_);
   changing_ = changing_elements;
   block_index_.assign(static_cast<std::size_t>(mesh_.dof_count()), -1);
   std::vector<int> block;
@@ -178,20 +179,25 @@ void ElasticProblem::assemble_and_factorize_anchor(const std::vector<char>& chan
       block_index_[static_cast<std::size_t>(d)] = static_cast<int>(block.size());
       block.push_back(d);
     }
-  if (!block_) block_ = std::make_unique<TrailingBlockCholesky>();
-  ++block_stats_.anchors;
-  block_stats_.block_dofs += static_cast<long long>(block.size());
-  const double seconds_before = block_->anchor_seconds();
-  // A later station refactorizes S (m^3 / 3 flops) and solves around it; past a quarter of a full
-  // factorization's flops the block would not pay.
+  // A later station refactorizes S densely (m^3 / 3 flops) and keeps a few m x m matrices: past a
+  // quarter of a full factorization's flops, or 4 000 dofs (640 MB a worker), it would not pay.
   const double m = static_cast<double>(block.size());
-  block_current_ = block_->factorize_anchor(K_, block, base_ordering_, [&](double full_flops) { return m * m * m / 3 <= 0.25 * full_flops; });
+  if (!(m * m * m / 3 <= 0.25 * full_flops_ && block.size() <= 4000)) {
+    ++block_stats_.full_chunks;
+    solver_.factorize(K_);
+    return;
+  }
+  if (!block_) block_ = std::make_unique<TrailingBlockCholesky>();
+  const double seconds_before = block_->anchor_seconds();
+  block_current_ = block_->factorize_anchor(K_, block, base_ordering_);
   block_stats_.anchor_seconds += block_->anchor_seconds() - seconds_before;
   if (!block_current_) {
     ++block_stats_.full_chunks;
     solver_.factorize(K_);
     return;
   }
+  ++block_stats_.anchors;
+  block_stats_.block_dofs += static_cast<long long>(block.size());
   anchor_activity_ = activity_;
 }
 
@@ -264,22 +270,34 @@ Eigen::MatrixXd ElasticProblem::solve() {
   for (int d : fixed_dofs_) F.row(d).setZero();
   Eigen::MatrixXd U = solve_by_group(F);
   if (!block_current_) {
-    if (measure_full_residual_) block_stats_.worst_full_residual = std::max(block_stats_.worst_full_residual, relative_residual(F, U));
+    if (measure_full_residual_) block_stats_.worst_full_residual = std::max(block_stats_.worst_full_residual, column_residuals(F, U).maxCoeff());
     return U;
   }
+  // Each group on its own, so that a group's columns stay what a problem holding it alone gives.
   const auto t0 = std::chrono::steady_clock::now();
-  const double residual = relative_residual(F, U);
+  const Eigen::VectorXd residuals = column_residuals(F, U);
   block_stats_.residual_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (residual <= residual_bound_) {
-    block_stats_.worst_residual = std::max(block_stats_.worst_residual, residual);
-    return U;
-  }
-  ++block_stats_.residual_fallbacks;
-  assemble_and_factorize();
-  return solve_by_group(F);
+  bool factorized = false;
+  for_each_group([&](Eigen::Index first, Eigen::Index n) {
+    const double residual = residuals.segment(first, n).maxCoeff();
+    if (residual <= residual_bound_) {
+      block_stats_.worst_residual = std::max(block_stats_.worst_residual, residual);
+      return;
+    }
+    ++block_stats_.residual_fallbacks;
+    if (!factorized) {
+      // The full path's matrix, bit for bit; K_ stays the anchor's for the chunk's next stations.
+      Eigen::SparseMatrix<double> K = assemble_stiffness(activity_);
+      hold(K, held_dofs());
+      solver_.factorize(K);
+      factorized = true;
+    }
+    U.middleCols(first, n) = solver_.solve(F.middleCols(first, n));
+  });
+  return U;
 }
 
-double ElasticProblem::relative_residual(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U) {
+Eigen::VectorXd ElasticProblem::column_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U) {
   // After a block refactorization K is the anchor's K_ plus the changed elements' (a - a_anchor) K_e;
   // held rows are F's zeros.
   Eigen::MatrixXd R = F;
@@ -296,12 +314,12 @@ double ElasticProblem::relative_residual(const Eigen::MatrixXd& F, const Eigen::
   for (int d = 0; d < mesh_.dof_count(); ++d)
     if (orphan_[static_cast<std::size_t>(d)]) R.row(d).setZero();
   for (int d : fixed_dofs_) R.row(d).setZero();
-  double worst = 0;
+  Eigen::VectorXd residuals(F.cols());
   for (Eigen::Index p = 0; p < F.cols(); ++p) {
     const double f = F.col(p).norm(), r = R.col(p).norm();
-    worst = std::max(worst, f > 0 ? r / f : (r > 0 ? std::numeric_limits<double>::infinity() : 0.0));
+    residuals(p) = f > 0 ? r / f : (r > 0 ? std::numeric_limits<double>::infinity() : 0.0);
   }
-  return worst;
+  return residuals;
 }
 
 void ElasticProblem::set_profile_groups(std::vector<int> sizes) {

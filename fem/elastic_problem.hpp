@@ -28,10 +28,10 @@ namespace drom::fem {
 
 // What the block refactorization (assemble_and_factorize_anchor / refactorize_changed) did.
 struct BlockStats {
-  int anchors = 0;               // factorizations with a block eliminated last
+  int anchors = 0;               // factorizations with a block eliminated last (blocks that paid)
   int block_refactorizations = 0;  // stations that refactorized only their block
   int full_chunks = 0;           // anchors whose block was too large to pay: factorized in full instead
-  int residual_fallbacks = 0;    // block solves whose residual failed the bound: solved again in full
+  int residual_fallbacks = 0;    // group solves whose residual failed the bound: solved again in full
   long long block_dofs = 0;      // summed over anchors
   double anchor_seconds = 0, refactorize_seconds = 0, solve_seconds = 0, residual_seconds = 0;
   double worst_residual = 0;     // of the block solves that were kept
@@ -70,13 +70,15 @@ class ElasticProblem {
   // (one flag per element): factorizes this state with those elements' dofs eliminated last
   // (fem/trailing_block_cholesky.hpp), so that each later station of the run only refactorizes that
   // block (refactorize_changed). When the block's dense refactorization would cost more than a
-  // quarter of a full one, factorizes in full instead, and the run's stations do too.
+  // quarter of a full one (or hold more than 4 000 dofs), factorizes in full instead, and the run's
+  // stations do too.
   void assemble_and_factorize_anchor(const std::vector<char>& changing_elements);
   // Step 3 for a later station of that run. The activity may differ from the anchor's only on the
   // changing elements (std::logic_error otherwise). Without an anchor: assemble_and_factorize().
   void refactorize_changed();
-  // A block solve whose relative residual max_p ||K u_p - f_p|| / ||f_p|| exceeds this is thrown
-  // away: the station is factorized in full and solved again (and so is the rest of its run).
+  // A block solve whose relative residual max_p ||K u_p - f_p|| / ||f_p|| over a profile group
+  // exceeds this is thrown away: the station is factorized in full and that group solved again
+  // (the run's next stations still try the block).
   void set_residual_bound(double bound) { residual_bound_ = bound; }
   const BlockStats& block_stats() const { return block_stats_; }
   // Also measure the residual of full solves (one more sparse product each), for comparison.
@@ -121,8 +123,8 @@ class ElasticProblem {
   // K_ at the current activity, held; orphan_ updated.
   void assemble_held();
   std::vector<char> held_dofs();  // orphans (from the activity) and fixed dofs; updates orphan_
-  // max_p ||K u_p - f_p|| / ||f_p|| of the current K.
-  double relative_residual(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U);
+  // ||K u_p - f_p|| / ||f_p|| per column, for the current K.
+  Eigen::VectorXd column_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U);
   Eigen::VectorXd gather(int e, const Eigen::VectorXd& u) const;
 
   const Mesh& mesh_;
@@ -140,7 +142,8 @@ class ElasticProblem {
   std::vector<int> block_index_;    // per dof: its index in the block, or -1
   std::vector<double> anchor_activity_;
   double anchor_scale_ = 1;
-  double residual_bound_ = 1e-9;
+  double residual_bound_ = 1e-8;
+  double full_flops_ = 0;  // of a full factorization in base_ordering_
   bool measure_full_residual_ = false;
   BlockStats block_stats_;
 

@@ -24,9 +24,17 @@ SpdSolver::SpdSolver(bool keep_order) : impl_(std::make_unique<Impl>()) {
   }
 }
 
-std::vector<int> fill_reducing_ordering(Eigen::SparseMatrix<double> lower) {
-  static std::mutex analysis;  // METIS's generator is process-global (see factorize)
-  std::lock_guard<std::mutex> lock(analysis);
+namespace {
+// METIS's random generator is process-global: two analyses at once interleave it and get different
+// orderings (and different round-off). Every analysis that may run METIS takes this lock.
+std::mutex& metis_lock() {
+  static std::mutex lock;
+  return lock;
+}
+}  // namespace
+
+std::vector<int> fill_reducing_ordering(Eigen::SparseMatrix<double> lower, double* flops) {
+  std::lock_guard<std::mutex> lock(metis_lock());
   cholmod_common common;
   cholmod_start(&common);
   cholmod_sparse A = Eigen::viewAsCholmod(lower);  // CHOLMOD's view needs a mutable matrix: taken by value
@@ -38,6 +46,7 @@ std::vector<int> fill_reducing_ordering(Eigen::SparseMatrix<double> lower) {
   }
   const int* perm = static_cast<const int*>(L->Perm);
   std::vector<int> ordering(perm, perm + lower.rows());
+  if (flops) *flops = common.fl;
   cholmod_free_factor(&L, &common);
   cholmod_finish(&common);
   return ordering;
@@ -48,12 +57,9 @@ SpdSolver& SpdSolver::operator=(SpdSolver&&) noexcept = default;
 
 void SpdSolver::factorize(const Eigen::SparseMatrix<double>& K) {
   if (!impl_->analyzed || impl_->size != K.rows()) {
-    // CHOLMOD orders with METIS, whose random generator is process-global: two analyses at once
-    // interleave it and get different orderings (and different round-off), so concurrent solvers
-    // would not give reproducible results. One analysis at a time; each reseeds, so every solver
-    // of the same pattern gets the same ordering.
-    static std::mutex analysis;
-    std::lock_guard<std::mutex> lock(analysis);
+    // One analysis at a time (metis_lock); each reseeds, so every solver of the same pattern gets
+    // the same ordering.
+    std::lock_guard<std::mutex> lock(metis_lock());
     const auto t0 = std::chrono::steady_clock::now();
     impl_->llt.analyzePattern(K);
     impl_->analyzed = true;

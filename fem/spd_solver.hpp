@@ -17,8 +17,9 @@ struct SolverStats {
 };
 
 // A fill-reducing ordering of a symmetric pattern (lower triangle given), as CHOLMOD would choose it:
-// ordering[k] = the row/column eliminated k-th.
-std::vector<int> fill_reducing_ordering(Eigen::SparseMatrix<double> lower);
+// ordering[k] = the row/column eliminated k-th. `flops`, if given: CHOLMOD's flop count of a
+// factorization in that order.
+std::vector<int> fill_reducing_ordering(Eigen::SparseMatrix<double> lower, double* flops = nullptr);
 
 class SpdSolver {
  public:

@@ -29,12 +29,34 @@ struct TrailingBlockCholesky::Cholmod {
   }
 };
 
+namespace {
+
+// A dense result CHOLMOD allocated, freed on every path.
+struct DenseResult {
+  cholmod_dense* dense;
+  cholmod_common* common;
+  DenseResult(cholmod_dense* d, cholmod_common* c) : dense(d), common(c) {}
+  ~DenseResult() {
+    if (dense) cholmod_free_dense(&dense, common);
+  }
+  DenseResult(const DenseResult&) = delete;
+  DenseResult& operator=(const DenseResult&) = delete;
+  Eigen::Map<const Eigen::MatrixXd> matrix() const {
+    return {static_cast<const double*>(dense->x), static_cast<Eigen::Index>(dense->nrow), static_cast<Eigen::Index>(dense->ncol)};
+  }
+};
+
+}  // namespace
+
 TrailingBlockCholesky::TrailingBlockCholesky() : cholmod_(std::make_unique<Cholmod>()) {}
 TrailingBlockCholesky::~TrailingBlockCholesky() = default;
 
-bool TrailingBlockCholesky::factorize_anchor(const Eigen::SparseMatrix<double>& K, std::span<const int> block, const std::vector<int>& ordering,
-                                             const std::function<bool(double)>& worthwhile) {
+bool TrailingBlockCholesky::factorize_anchor(const Eigen::SparseMatrix<double>& K, std::span<const int> block, const std::vector<int>& ordering) {
   const auto t0 = std::chrono::steady_clock::now();
+  auto& c = *cholmod_;
+  // Whatever happens below, nothing of the previous anchor survives.
+  if (c.factor) cholmod_free_factor(&c.factor, &c.common);
+  kept_.clear();
   const Eigen::Index n = K.rows();
   if (static_cast<Eigen::Index>(ordering.size()) != n) throw std::invalid_argument("TrailingBlockCholesky: the ordering must have one entry per dof");
   std::vector<char> in_block(static_cast<std::size_t>(n), 0);
@@ -56,21 +78,23 @@ bool TrailingBlockCholesky::factorize_anchor(const Eigen::SparseMatrix<double>& 
   cholmod_sparse A = Eigen::viewAsCholmod(permuted);
   A.stype = -1;
 
-  auto& c = *cholmod_;
-  if (c.factor) cholmod_free_factor(&c.factor, &c.common);
   c.factor = cholmod_analyze(&A, &c.common);
-  if (!c.factor) throw std::runtime_error("CHOLMOD: cannot analyze the stiffness pattern");
+  if (!c.factor) {
+    anchor_seconds_ += seconds_since(t0);
+    return false;
+  }
   anchor_flops_ = c.common.fl;
   anchor_nonzeros_ = c.common.lnz;
-  if (worthwhile && !worthwhile(anchor_flops_)) {
+  cholmod_factorize(&A, c.factor, &c.common);
+  if (c.common.status == CHOLMOD_NOT_POSDEF || c.factor->minor < c.factor->n) {
+    cholmod_free_factor(&c.factor, &c.common);
+    throw std::runtime_error("stiffness matrix is not positive definite: the part is not held against rigid motion");
+  }
+  if (c.common.status != CHOLMOD_OK || !c.factor->is_super) {
     cholmod_free_factor(&c.factor, &c.common);
     anchor_seconds_ += seconds_since(t0);
     return false;
   }
-  cholmod_factorize(&A, c.factor, &c.common);
-  if (c.common.status == CHOLMOD_NOT_POSDEF || c.factor->minor < c.factor->n)
-    throw std::runtime_error("stiffness matrix is not positive definite: the part is not held against rigid motion");
-  if (c.common.status != CHOLMOD_OK || !c.factor->is_super) throw std::runtime_error("CHOLMOD: the anchor factorization failed");
   const int* perm = static_cast<const int*>(c.factor->Perm);
   for (Eigen::Index k = 0; k < n; ++k)
     if (perm[k] != k) throw std::logic_error("TrailingBlockCholesky: CHOLMOD reordered the given order");
@@ -90,9 +114,10 @@ bool TrailingBlockCholesky::factorize_anchor(const Eigen::SparseMatrix<double>& 
       for (int r = col - c0; r < height; ++r)
         lower_bb_(rows[pi[s] + r] - first, col - first) = x[px[s] + static_cast<std::ptrdiff_t>(col - c0) * height + r];
   }
-  schur_anchor_ = lower_bb_.triangularView<Eigen::Lower>() * lower_bb_.transpose();
-  schur_.compute(schur_anchor_);
-  kept_.clear();
+  schur_anchor_ = Eigen::MatrixXd::Zero(m, m);
+  schur_anchor_.selfadjointView<Eigen::Lower>().rankUpdate(lower_bb_);
+  schur_anchor_ = schur_anchor_.selfadjointView<Eigen::Lower>();
+  schur_is_anchor_ = true;
   anchor_seconds_ += seconds_since(t0);
   return true;
 }
@@ -104,6 +129,7 @@ bool TrailingBlockCholesky::refactorize(const Eigen::MatrixXd& schur) {
   refactorize_seconds_ += seconds_since(t0);
   if (next.info() != Eigen::Success) return false;
   schur_ = std::move(next);
+  schur_is_anchor_ = false;
   return true;
 }
 
@@ -125,11 +151,10 @@ Eigen::MatrixXd TrailingBlockCholesky::solve(const Eigen::MatrixXd& rhs) {
     b.topRows(first) = f_r;
     b.bottomRows(m).setZero();
     cholmod_dense forward_in = Eigen::viewAsCholmod(b);
-    cholmod_dense* forward = cholmod_solve(CHOLMOD_L, c.factor, &forward_in, &c.common);
-    if (!forward) throw std::runtime_error("CHOLMOD: the forward solve failed");
+    const DenseResult forward(cholmod_solve(CHOLMOD_L, c.factor, &forward_in, &c.common), &c.common);
+    if (!forward.dense) throw std::runtime_error("CHOLMOD: the forward solve failed");
     if (kept_.size() == 4) kept_.erase(kept_.begin());  // one per profile group, in practice
-    kept_.push_back({std::move(f_r), Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(forward->x), n, rhs.cols())});
-    cholmod_free_dense(&forward, &c.common);
+    kept_.push_back({std::move(f_r), forward.matrix()});
     kept = std::prev(kept_.end());
     ++forward_solves_;
   }
@@ -137,16 +162,23 @@ Eigen::MatrixXd TrailingBlockCholesky::solve(const Eigen::MatrixXd& rhs) {
   Eigen::MatrixXd f_b(m, rhs.cols());
   for (Eigen::Index k = 0; k < m; ++k) f_b.row(k) = rhs.row(block_[static_cast<std::size_t>(k)]);
   f_b += lower_bb_.triangularView<Eigen::Lower>() * y.bottomRows(m);
-  const Eigen::MatrixXd x_b = schur_.solve(f_b);
-  y.bottomRows(m) = lower_bb_.triangularView<Eigen::Lower>().transpose() * x_b;
+  Eigen::MatrixXd x_b;
+  if (schur_is_anchor_) {
+    // S is the anchor's, L_BB L_BB^T: the backward solve below finishes x_B itself.
+    y.bottomRows(m) = lower_bb_.triangularView<Eigen::Lower>().solve(f_b);
+  } else {
+    x_b = schur_.solve(f_b);
+    y.bottomRows(m) = lower_bb_.triangularView<Eigen::Lower>().transpose() * x_b;
+  }
   cholmod_dense backward_in = Eigen::viewAsCholmod(y);
-  cholmod_dense* backward = cholmod_solve(CHOLMOD_Lt, c.factor, &backward_in, &c.common);
-  if (!backward) throw std::runtime_error("CHOLMOD: the backward solve failed");
-  const Eigen::Map<const Eigen::MatrixXd> z(static_cast<const double*>(backward->x), n, rhs.cols());
+  const DenseResult backward(cholmod_solve(CHOLMOD_Lt, c.factor, &backward_in, &c.common), &c.common);
+  if (!backward.dense) throw std::runtime_error("CHOLMOD: the backward solve failed");
+  const auto z = backward.matrix();
   Eigen::MatrixXd x(n, rhs.cols());
   for (Eigen::Index k = 0; k < first; ++k) x.row(order_[static_cast<std::size_t>(k)]) = z.row(k);
+  // x_B as the dense solve gave it (the backward solve only gives it back through L_BB^-T L_BB^T).
+  if (schur_is_anchor_) x_b = z.bottomRows(m);
   for (Eigen::Index k = 0; k < m; ++k) x.row(block_[static_cast<std::size_t>(k)]) = x_b.row(k);
-  cholmod_free_dense(&backward, &c.common);
   solve_seconds_ += seconds_since(t0);
   return x;
 }

@@ -15,7 +15,6 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
-#include <functional>
 #include <memory>
 #include <span>
 #include <vector>
@@ -31,11 +30,9 @@ class TrailingBlockCholesky {
 
   // K: lower triangle. block: the dofs later changes may touch (any order; kept as given: block index
   // b is dof block[b]). ordering: a fill-reducing order of K's pattern (fill_reducing_ordering); R
-  // keeps its relative order, B goes after it. After the symbolic analysis, `worthwhile` gets the
-  // factorization's flop count; if it says no, nothing is factorized and this returns false. Throws
-  // std::runtime_error if K is not positive definite.
-  bool factorize_anchor(const Eigen::SparseMatrix<double>& K, std::span<const int> block, const std::vector<int>& ordering,
-                        const std::function<bool(double flops)>& worthwhile = {});
+  // keeps its relative order, B goes after it. Returns false, holding no factor, if CHOLMOD cannot
+  // analyze or factorize it (e.g. too large); throws std::runtime_error if K is not positive definite.
+  bool factorize_anchor(const Eigen::SparseMatrix<double>& K, std::span<const int> block, const std::vector<int>& ordering);
   // The Schur complement S of the anchor on B (block order): what refactorize() starts from.
   const Eigen::MatrixXd& anchor_schur() const { return schur_anchor_; }
   // The current matrix's S (the anchor's plus its change on B x B). Returns false, keeping the
@@ -61,7 +58,8 @@ class TrailingBlockCholesky {
   std::vector<int> block_;
   Eigen::MatrixXd lower_bb_;        // L_BB of the anchor
   Eigen::MatrixXd schur_anchor_;    // L_BB L_BB^T
-  Eigen::LLT<Eigen::MatrixXd> schur_;  // of the current S
+  Eigen::LLT<Eigen::MatrixXd> schur_;  // of the current S, unless it is the anchor's (L_BB is its factor)
+  bool schur_is_anchor_ = true;
   struct KeptForward {
     Eigen::MatrixXd f_r, forward;  // f_R and the forward solve of [f_R; 0]
   };

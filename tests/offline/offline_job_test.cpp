@@ -303,7 +303,10 @@ TEST(Offline, BlockRefactorizationWritesTheFullFactorizationsDatabase) {
   // criteria. Two full factorizations that differ only in elimination order already differ by about
   // 1e-8 of the database's largest value on these thin, stretched elements (docs/benchmarks.md), so
   // the bound is 5e-8, not 1e-9.
-  for (const auto& [name, setup] : {std::pair{"plate", kPlate + kPlateStressTruth}, std::pair{"panel", kPanel + kPanelStressTruth}})
+  // On the coarse panel (12 x 12 x 3) 16 stations sweep most of the pocket: the block would not pay,
+  // and the job factorizes those chunks in full. Chunks of 2 stations compare the block path there.
+  for (const auto& [name, setup] : {std::pair{"plate", kPlate + kPlateStressTruth},
+                                    std::pair{"panel", kPanel + kPanelStressTruth + " --set solver.stations_per_factorization=2"}})
     for (const char* criterion : {"volume_fraction", "centroid"}) {
       const std::string label = std::string(name) + "_" + criterion;
       const auto full = dir("block_full_" + label), block = dir("block_" + label);
@@ -320,22 +323,41 @@ TEST(Offline, BlockRefactorizationWritesTheFullFactorizationsDatabase) {
         EXPECT_LT(relative(B, A), 5e-8) << label << " " << matrix;
       }
       const auto stats = block_statistics(block);
-      EXPECT_GT(stats["block_refactorizations"].get<int>(), 2 * stats["anchors"].get<int>()) << label;
+      EXPECT_GT(stats["anchors"].get<int>(), 0) << label;
+      EXPECT_GE(stats["block_refactorizations"].get<int>(), stats["anchors"].get<int>()) << label;
       EXPECT_EQ(stats["residual_fallbacks"].get<int>(), 0) << label;
       EXPECT_EQ(block_statistics(full)["anchors"].get<int>(), 0) << label;
     }
 }
 
 TEST(Offline, AFailedResidualCheckRefactorizesInFull) {
-  // A residual bound no solve meets: every chunk's first solve fails it, and the chunk goes on with
-  // full factorizations, so the database is the full path's, byte for byte.
+  // A residual bound no solve meets: every station's block solve fails it and is solved again on a
+  // full factorization, so the database is the full path's, byte for byte.
   const auto full = dir("fallback_full"), forced = dir("fallback_forced");
   ASSERT_EQ(run("truth" + kPlate + " --set solver.stations_per_factorization=1 --out " + full.string()), "");
   ASSERT_EQ(run("truth" + kPlate + " --set solver.residual_bound=1e-300 --out " + forced.string()), "");
   drom::Hdf5Reader a(full / "database.h5"), b(forced / "database.h5");
   for (const char* name : {"B1", "B2", "B1_top"}) EXPECT_EQ(a.matrix(name).data, b.matrix(name).data) << name;  // (the case, hashed too, differs)
   const auto stats = block_statistics(forced);
+  const int stations = nlohmann::json::parse(std::ifstream(forced / "summary.json"))["stations"].get<int>();
   EXPECT_GT(stats["anchors"].get<int>(), 1);
-  EXPECT_EQ(stats["residual_fallbacks"].get<int>(), stats["anchors"].get<int>());
-  EXPECT_EQ(stats["block_refactorizations"].get<int>(), 0);
+  EXPECT_EQ(stats["residual_fallbacks"].get<int>(), stations);
+  EXPECT_EQ(stats["block_refactorizations"].get<int>(), stations - stats["anchors"].get<int>());
+}
+
+TEST(Offline, FeBlockRunDoesNotDependOnThreadsResumesOrSlices) {
+  // Each chunk of stations starts from its own full factorization, with the whole chunk's block, so
+  // neither the thread count, nor an interruption mid-chunk, nor a slice boundary mid-chunk changes
+  // what is solved.
+  const auto whole = dir("fe_block_whole"), parts = dir("fe_block_parts"), slices = dir("fe_block_slices");
+  ASSERT_EQ(run("truth" + kPlate + " --threads 2 --out " + whole.string()), "");
+  ASSERT_EQ(run("truth" + kPlate + " --threads 1 --stop-after 21 --out " + parts.string()), "");
+  ASSERT_EQ(run("truth" + kPlate + " --threads 2 --resume --out " + parts.string()), "");
+  ASSERT_EQ(run("truth" + kPlate + " --threads 1 --stations 0:25 --out " + slices.string()), "");
+  ASSERT_EQ(run("truth" + kPlate + " --threads 2 --stations 25: --out " + slices.string()), "");
+  ASSERT_EQ(run("merge" + kPlate + " --kind truth --out " + slices.string()), "");
+  drom::Hdf5Reader a(whole / "database.h5"), b(parts / "database.h5"), c(slices / "database.h5");
+  EXPECT_EQ(a.text_attribute("content_hash"), b.text_attribute("content_hash"));
+  EXPECT_EQ(a.text_attribute("content_hash"), c.text_attribute("content_hash"));
+  EXPECT_GT(block_statistics(whole)["block_refactorizations"].get<int>(), 0);
 }
