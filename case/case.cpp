@@ -38,19 +38,16 @@ void read_part(TomlReader& r, Case& c) {
 
 void read_solver(TomlReader& r, Case& c) {
   c.solver = r.choice("solver.kind", {"fe", "pgd"}, "fe");
-  if (c.solver == "pgd") {
-    for (const char* key : {"solver.stations_per_factorization", "solver.residual_bound"})
-      if (r.has(key)) r.fail(key, "is a setting of the FE solver: it needs solver.kind = \"fe\"");
-  } else {
+  if (c.solver != "pgd") {
     c.stations_per_factorization = static_cast<int>(r.integer("solver.stations_per_factorization", 1, 10000, c.stations_per_factorization));
     c.residual_bound = r.real("solver.residual_bound", Range::open(0, 1), c.residual_bound);
-  }
-  if (c.solver != "pgd") {
     for (const char* key : {"solver.residual_tolerance", "solver.increment_tolerance", "solver.fixed_point_tolerance", "solver.max_modes", "solver.max_fixed_point_iterations",
                             "solver.anderson_depth", "solver.max_update_functions", "solver.update_every", "solver.warm_start_truncation", "solver.indicator_tolerance", "solver.penalty"})
       if (r.has(key)) r.fail(key, "is a setting of the PGD solver: it needs solver.kind = \"pgd\"");
     return;
   }
+  for (const char* key : {"solver.stations_per_factorization", "solver.residual_bound"})
+    if (r.has(key)) r.fail(key, "is a setting of the FE solver: it needs solver.kind = \"fe\"");
   if (c.shape == "stl") r.fail("solver.kind", "pgd separates the plane from the thickness: it needs a plate or a panel, not an STL part");
   auto& s = c.pgd;
   auto real = [&](const char* key, Range range) { return r.has(key) ? std::optional<double>(r.real(key, range)) : std::nullopt; };

@@ -150,13 +150,22 @@ std::vector<char> ElasticProblem::held_dofs() {
   return held;
 }
 
-void ElasticProblem::assemble_held() {
-  K_ = assemble_stiffness(activity_);
-  anchor_scale_ = hold(K_, held_dofs());
+Eigen::SparseMatrix<double> ElasticProblem::held_stiffness(double* scale) {
+  Eigen::SparseMatrix<double> K = assemble_stiffness(activity_);
+  const double s = hold(K, held_dofs());
+  if (scale) *scale = s;
+  return K;
+}
+
+std::vector<std::pair<int, double>> ElasticProblem::changes_since_anchor() const {
+  std::vector<std::pair<int, double>> changes;
+  for (int e = 0; e < mesh_.element_count(); ++e)
+    if (const double delta = activity_[static_cast<std::size_t>(e)] - anchor_activity_[static_cast<std::size_t>(e)]; delta != 0) changes.emplace_back(e, delta);
+  return changes;
 }
 
 void ElasticProblem::assemble_and_factorize() {
-  assemble_held();
+  K_ = held_stiffness(&anchor_scale_);
   solver_.factorize(K_);
   block_current_ = false;
 }
@@ -165,7 +174,7 @@ void ElasticProblem::assemble_and_factorize_anchor(const std::vector<char>& chan
   if (static_cast<int>(changing_elements.size()) != mesh_.element_count())
     throw std::invalid_argument("assemble_and_factorize_anchor: one flag per element");
   block_current_ = false;
-  assemble_held();
+  K_ = held_stiffness(&anchor_scale_);
   if (base_ordering_.empty()) base_ordering_ = fill_reducing_ordering(K_, &full_flops_);
   changing_ = changing_elements;
   block_index_.assign(static_cast<std::size_t>(mesh_.dof_count()), -1);
@@ -206,15 +215,12 @@ void ElasticProblem::refactorize_changed() {
     assemble_and_factorize();
     return;
   }
-  for (int e = 0; e < mesh_.element_count(); ++e)
-    if (activity_[static_cast<std::size_t>(e)] != anchor_activity_[static_cast<std::size_t>(e)] && !changing_[static_cast<std::size_t>(e)])
-      throw std::logic_error("refactorize_changed: element " + std::to_string(e) + " changed outside the anchor's block");
   // S = the anchor's + sum over changed elements of (a - a_anchor) K_e on the block; then the held
   // dofs' rows and columns as the full assembly holds them (orphans appear as material goes).
   Eigen::MatrixXd S = block_->anchor_schur();
-  for (int e = 0; e < mesh_.element_count(); ++e) {
-    const double delta = activity_[static_cast<std::size_t>(e)] - anchor_activity_[static_cast<std::size_t>(e)];
-    if (delta == 0) continue;
+  for (const auto& [e, delta] : changes_since_anchor()) {
+    if (!changing_[static_cast<std::size_t>(e)])
+      throw std::logic_error("refactorize_changed: element " + std::to_string(e) + " changed outside the anchor's block");
     const auto nodes = mesh_.element(e);
     const Eigen::MatrixXd& Ke = operators_.stiffness(e);
     for (std::size_t a = 0; a < 3 * nodes.size(); ++a) {
@@ -287,9 +293,7 @@ Eigen::MatrixXd ElasticProblem::solve() {
     ++block_stats_.residual_fallbacks;
     if (!factorized) {
       // The full path's matrix, bit for bit; K_ stays the anchor's for the chunk's next stations.
-      Eigen::SparseMatrix<double> K = assemble_stiffness(activity_);
-      hold(K, held_dofs());
-      solver_.factorize(K);
+      solver_.factorize(held_stiffness());
       factorized = true;
     }
     U.middleCols(first, n) = solver_.solve(F.middleCols(first, n));
@@ -302,9 +306,7 @@ Eigen::VectorXd ElasticProblem::column_residuals(const Eigen::MatrixXd& F, const
   // held rows are F's zeros.
   Eigen::MatrixXd R = F;
   R.noalias() -= K_.selfadjointView<Eigen::Lower>() * U;
-  for (int e = 0; block_current_ && e < mesh_.element_count(); ++e) {
-    const double delta = activity_[static_cast<std::size_t>(e)] - anchor_activity_[static_cast<std::size_t>(e)];
-    if (delta == 0) continue;
+  for (const auto& [e, delta] : block_current_ ? changes_since_anchor() : std::vector<std::pair<int, double>>{}) {
     const auto nodes = mesh_.element(e);
     Eigen::MatrixXd ue(3 * static_cast<Eigen::Index>(nodes.size()), U.cols());
     for (std::size_t a = 0; a < nodes.size(); ++a) ue.middleRows<3>(3 * static_cast<Eigen::Index>(a)) = U.middleRows<3>(3 * nodes[a]);

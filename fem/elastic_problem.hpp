@@ -22,6 +22,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace drom::fem {
@@ -120,8 +121,11 @@ class ElasticProblem {
   }
   // Zeroes the held dofs' rows and columns and gives them the mean diagonal of the others (returned).
   double hold(Eigen::SparseMatrix<double>& K, const std::vector<char>& held) const;
-  // K_ at the current activity, held; orphan_ updated.
-  void assemble_held();
+  // The stiffness at the current activity, held (orphan_ updated); `scale`, if given, gets the held
+  // dofs' diagonal.
+  Eigen::SparseMatrix<double> held_stiffness(double* scale = nullptr);
+  // (element, a - a_anchor) for every element whose fraction differs from the anchor's.
+  std::vector<std::pair<int, double>> changes_since_anchor() const;
   std::vector<char> held_dofs();  // orphans (from the activity) and fixed dofs; updates orphan_
   // ||K u_p - f_p|| / ||f_p|| per column, for the current K.
   Eigen::VectorXd column_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U);

@@ -83,8 +83,6 @@ bool TrailingBlockCholesky::factorize_anchor(const Eigen::SparseMatrix<double>& 
     anchor_seconds_ += seconds_since(t0);
     return false;
   }
-  anchor_flops_ = c.common.fl;
-  anchor_nonzeros_ = c.common.lnz;
   cholmod_factorize(&A, c.factor, &c.common);
   if (c.common.status == CHOLMOD_NOT_POSDEF || c.factor->minor < c.factor->n) {
     cholmod_free_factor(&c.factor, &c.common);

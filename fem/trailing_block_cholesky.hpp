@@ -43,9 +43,6 @@ class TrailingBlockCholesky {
 
   Eigen::Index block_size() const { return static_cast<Eigen::Index>(block_.size()); }
   const std::vector<int>& block() const { return block_; }
-  // Of the anchor factorization: CHOLMOD's flop count and nonzeros of L.
-  double anchor_flops() const { return anchor_flops_; }
-  double anchor_nonzeros() const { return anchor_nonzeros_; }
   double anchor_seconds() const { return anchor_seconds_; }
   double refactorize_seconds() const { return refactorize_seconds_; }
   double solve_seconds() const { return solve_seconds_; }
@@ -65,7 +62,6 @@ class TrailingBlockCholesky {
   };
   std::vector<KeptForward> kept_;
   int forward_solves_ = 0;
-  double anchor_flops_ = 0, anchor_nonzeros_ = 0;
   double anchor_seconds_ = 0, refactorize_seconds_ = 0, solve_seconds_ = 0;
 };
 
