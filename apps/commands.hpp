@@ -21,6 +21,7 @@ struct CommandOptions {
   int frames = -1;       // full-field VTK frames; -1: 10 for truth, none for offline
   std::string stations;  // "a:b": only these stations, into the checkpoint folder (drom merge after)
   std::string merge_kind = "offline";  // drom merge: the slices of drom offline or of drom truth
+  long long export_ccx = -1;           // drom offline / truth: write this station as a CalculiX deck instead
   // drom reduce (case_path holds the database)
   double tolerance = 1e-3;          // mm, POD truncation bound
   double history_tolerance = -1;    // mm, all space-time compressions together; -1: tolerance / 2

@@ -122,6 +122,10 @@ int main(int argc, char** argv) {
           ->check(CLI::NonNegativeNumber);
       cmd->add_option("--stations", options.stations,
                       "only stations a to b - 1 (a:b, a: or :b), into --out's checkpoint folder; drom merge writes the database once all are there");
+      cmd->add_option("--export-ccx", options.export_ccx,
+                      "instead of the job: station K (0-based) as a CalculiX deck (station_K.inp, run ccx -i station_K) with drom's answer beside it "
+                      "(station_K_drom.csv)")
+          ->check(CLI::NonNegativeNumber);
     }
     if (std::string(sub.name) == "merge") {
       cmd->add_option("--kind", options.merge_kind, "the slices of drom offline or of drom truth")->capture_default_str()->check(CLI::IsMember({"offline", "truth"}));

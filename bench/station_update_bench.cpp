@@ -3,13 +3,16 @@
 // with the chunk's machined dofs eliminated last, then only that dense block per station), on the
 // same consecutive stations, in the same run, on one thread with single-threaded BLAS (one drom
 // offline worker). The case is set up as drom offline does (mesh, clamps, toolpath, removal, unit
-// profiles). Prints JSON.
-//   build/bench/station_update_bench CASE.toml [--set key=value]... [--stations 32] [--chunk 16]
+// profiles). With --ccx 1, the last of those stations is also exported as a CalculiX deck
+// (offline/calculix_export.hpp) and solved by ccx on one thread, in the same run: the ratio of a ccx
+// step to a drom station, and how far their answers are apart. Prints JSON.
+//   build/bench/station_update_bench CASE.toml [--set key=value]... [--stations 32] [--chunk 16] [--ccx 1]
 // e.g. the quick flat plate:
 //   build/bench/station_update_bench cases/flat_plate.toml --set mesh.nx=20 --set mesh.ny=20 --set path.station_spacing=100
 #include "case/case.hpp"
 #include "fem/elastic_problem.hpp"
 #include "fem/supports.hpp"
+#include "offline/calculix_export.hpp"
 #include "offline/machining_run.hpp"
 #include "offline/part_setup.hpp"
 #include "support/kernel_threads.hpp"
@@ -20,8 +23,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 using namespace drom;
 
@@ -32,10 +38,12 @@ int main(int argc, char** argv) {
   }
   std::vector<std::string> overrides;
   int wanted = 32, chunk = 16;
+  bool calculix = false;
   for (int i = 2; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--set")) overrides.emplace_back(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--stations")) wanted = std::atoi(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--chunk")) chunk = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--ccx")) calculix = std::atoi(argv[i + 1]) != 0;
   }
   const SingleThreadedKernels single_threaded_kernels;  // as a drom offline worker
   const cases::Case c = cases::load_case(std::string(argv[1]), overrides);
@@ -111,6 +119,19 @@ int main(int argc, char** argv) {
   // full factorization in another elimination order, which sets the round-off floor.
   std::printf("  \"max_relative_difference\": {\"refactorized_stations\": %.2e, \"anchor_stations\": %.2e, \"database_top_z\": %.2e},\n",
               worst_refactorized, worst_anchor, database_diff.cwiseQuotient(database_max).maxCoeff());
+  if (calculix) {
+    // One profile (the case's [stress]) against drom's P unit profiles a station: the ratio favours ccx.
+    const auto folder = std::filesystem::temp_directory_path() / ("drom_ccx_bench_" + std::to_string(::getpid()));
+    const std::size_t station = history.size() - 1;
+    const auto exported = offline::export_calculix_station(c, offline::JobKind::Offline, station, folder);
+    const auto ccx = fem::run_calculix(exported.deck, exported.deck_stats.nodes, 1);
+    const double difference = (ccx.displacement - exported.drom_displacement).cwiseAbs().maxCoeff() / exported.drom_displacement.cwiseAbs().maxCoeff();
+    std::printf("  \"calculix\": {\"station\": %zu, \"removed_elements\": %d, \"partial_elements\": %d, \"deck_mb\": %.1f, \"ccx_wall_s\": %.3f, \"ccx_reported_s\": %.3f,\n",
+                station, exported.deck_stats.removed, exported.deck_stats.partial, exported.deck_stats.megabytes, ccx.wall_seconds, ccx.reported_seconds);
+    std::printf("               \"ccx_over_full_station\": %.1f, \"ccx_over_block_station\": %.1f, \"max_relative_difference\": %.2e},\n",
+                ccx.wall_seconds / (full_s / ns), ccx.wall_seconds / (block_s / ns), difference);
+    std::filesystem::remove_all(folder);
+  }
   std::printf("  \"peak_memory_mb\": %.0f\n}\n", static_cast<double>(peak_memory_bytes()) / 1048576.0);
   return 0;
 }

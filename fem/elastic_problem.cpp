@@ -366,4 +366,9 @@ std::vector<Vector6d> ElasticProblem::element_stresses(int p, const Eigen::Vecto
   return stresses;
 }
 
+Vector6d ElasticProblem::initial_stress(int p, int e, const Eigen::Vector3d& xi) const {
+  if (!equilibrated_) throw std::logic_error("initial_stress before equilibrate");
+  return operators_.point_stress(e, xi, gather(e, u0_.col(p)), &profiles_[static_cast<std::size_t>(p)], shape_);
+}
+
 }  // namespace drom::fem

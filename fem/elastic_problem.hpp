@@ -91,6 +91,7 @@ class ElasticProblem {
   const PartShape& shape() const { return shape_; }
   const std::vector<StressProfile>& profiles() const { return profiles_; }
   const std::vector<double>& activity() const { return activity_; }
+  const std::vector<int>& fixed_dofs() const { return fixed_dofs_; }
   // Dofs with no stiffness left (every element around them removed); held at zero.
   const std::vector<char>& orphan_dofs() const { return orphan_; }
   // Nodes that still touch material.
@@ -102,6 +103,9 @@ class ElasticProblem {
 
   // Element-average total stress sigma_R + C eps(u0 + u) for profile p.
   std::vector<Vector6d> element_stresses(int p, const Eigen::VectorXd& u) const;
+  // sigma0 = sigma_R + C eps(u0) of profile p at reference point xi of element e: the equilibrated
+  // stock's stress, which another FE code takes as its initial stress (fem/calculix_deck.hpp).
+  Vector6d initial_stress(int p, int e, const Eigen::Vector3d& xi) const;
 
   const SolverStats& solver_stats() const { return solver_.stats(); }
   // The stiffness factorized by the last assemble_and_factorize() or anchor (lower triangle, held dofs).

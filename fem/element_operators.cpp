@@ -115,24 +115,36 @@ Eigen::MatrixXd ElementOperators::stress_load(int e, std::span<const StressProfi
   return f;
 }
 
-Vector6d ElementOperators::mean_stress(int e, const Eigen::VectorXd& ue, const StressProfile* profile, const PartShape& shape) const {
-  const Eigen::Matrix3Xd X = mesh_.element_nodes(e);
+Vector6d ElementOperators::stress_at(const Eigen::Matrix3Xd& X, const Eigen::Vector3d& xi, const Eigen::VectorXd& ue, const StressProfile* profile,
+                                     const PartShape& shape, double* det_J) const {
   Eigen::MatrixXd B;
   Eigen::VectorXd N;
   Eigen::MatrixX3d dN;
+  shape_functions(mesh_.type, xi, N, dN);
+  const Eigen::Matrix3d J = X * dN;
+  if (det_J) *det_J = J.determinant();
+  strain_matrix(dN * J.inverse(), B);
+  Vector6d s = C_ * (B * ue);
+  if (profile) s += to_voigt(profile->tensor(shape, X * N));
+  return s;
+}
+
+Vector6d ElementOperators::mean_stress(int e, const Eigen::VectorXd& ue, const StressProfile* profile, const PartShape& shape) const {
+  const Eigen::Matrix3Xd X = mesh_.element_nodes(e);
   Vector6d sum = Vector6d::Zero();
   double volume = 0;
   for (const auto& q : stiffness_rule_) {
-    shape_functions(mesh_.type, q.xi, N, dN);
-    const Eigen::Matrix3d J = X * dN;
-    const double w = q.weight * J.determinant();
-    strain_matrix(dN * J.inverse(), B);
-    Vector6d s = C_ * (B * ue);
-    if (profile) s += to_voigt(profile->tensor(shape, X * N));
-    sum += w * s;
-    volume += w;
+    double det_J = 0;
+    const Vector6d s = stress_at(X, q.xi, ue, profile, shape, &det_J);
+    sum += q.weight * det_J * s;
+    volume += q.weight * det_J;
   }
   return sum / volume;
+}
+
+Vector6d ElementOperators::point_stress(int e, const Eigen::Vector3d& xi, const Eigen::VectorXd& ue, const StressProfile* profile,
+                                        const PartShape& shape) const {
+  return stress_at(mesh_.element_nodes(e), xi, ue, profile, shape, nullptr);
 }
 
 }  // namespace drom::fem

@@ -40,12 +40,18 @@ class ElementOperators {
   // Average over the element's quadrature points of C eps(u_e) + sigma_R (u_e: element dofs).
   Vector6d mean_stress(int e, const Eigen::VectorXd& element_displacement, const StressProfile* profile,
                        const PartShape& shape) const;
+  // The same stress at one reference point of the element (what another code's integration point reads).
+  Vector6d point_stress(int e, const Eigen::Vector3d& xi, const Eigen::VectorXd& element_displacement, const StressProfile* profile,
+                        const PartShape& shape) const;
 
   std::size_t distinct_shapes() const { return cache_.size(); }
 
  private:
   Eigen::MatrixXd compute_stiffness(const Eigen::Matrix3Xd& X) const;
   static void strain_matrix(const Eigen::MatrixX3d& dNdx, Eigen::MatrixXd& B);
+  // C eps(u_e) + sigma_R at reference point xi of the element with nodes X; *det_J gets the Jacobian's determinant.
+  Vector6d stress_at(const Eigen::Matrix3Xd& X, const Eigen::Vector3d& xi, const Eigen::VectorXd& ue, const StressProfile* profile,
+                     const PartShape& shape, double* det_J) const;
 
   const Mesh& mesh_;
   Matrix6d C_;

@@ -1,7 +1,9 @@
 // drom offline, drom truth and drom merge: the offline job (offline/offline_job.hpp), alone or as
 // one rank of an MPI job (offline/process_team.hpp).
 #include "apps/commands.hpp"
+#include "offline/calculix_export.hpp"
 #include "offline/offline_job.hpp"
+#include "support/input_error.hpp"
 #include "offline/process_team.hpp"
 
 #include <cstdio>
@@ -10,7 +12,22 @@ namespace drom::app {
 
 namespace {
 
+int export_ccx(const CommandOptions& options, offline::JobKind kind) {
+  if (options.resume || !options.stations.empty() || options.stop_after >= 0)
+    throw InputError("--export-ccx writes one station's deck: it does not combine with --resume, --stations or --stop-after");
+  const auto c = cases::load_case(options.case_path, options.overrides);
+  const auto e = offline::export_calculix_station(c, kind, static_cast<std::size_t>(options.export_ccx), options.out);
+  if (!options.quiet)
+    std::printf("drom %s: %s: station %zu of %zu as a CalculiX deck: %d nodes, %d C3D20, %d removed, %d partly machined, %d fixed dofs (%.1f MB) -> %s\n"
+                "  drom's answer (one full factorization, %.2f s): %s; max |u| %.4g mm\n  run: cd %s && ccx -i %s\n",
+                kind == offline::JobKind::Truth ? "truth" : "offline", c.name.c_str(), e.station, e.stations, e.deck_stats.nodes, e.deck_stats.elements,
+                e.deck_stats.removed, e.deck_stats.partial, e.deck_stats.fixed_dofs, e.deck_stats.megabytes, e.deck.string().c_str(), e.drom_solve_seconds,
+                e.drom_csv.string().c_str(), e.drom_displacement.cwiseAbs().maxCoeff(), options.out.string().c_str(), e.deck.stem().string().c_str());
+  return 0;
+}
+
 int job(const CommandOptions& options, offline::JobKind kind, bool merge) {
+  if (options.export_ccx >= 0) return export_ccx(options, kind);
   const auto team = offline::join_launched_team();
   cases::Case c;
   // Every rank reads the case; a bad one stops them all with the same message.
