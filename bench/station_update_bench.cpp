@@ -6,14 +6,16 @@
 // profiles). With --ccx 1, the last of those stations is also exported as a CalculiX deck
 // (offline/calculix_export.hpp) and solved by ccx on one thread, in the same run: the ratio of a ccx
 // step to a drom station, and how far their answers are apart. Prints JSON.
-//   build/bench/station_update_bench CASE.toml [--set key=value]... [--stations 32] [--chunk 16] [--ccx 1]
+//   build/bench/station_update_bench CASE.toml [--set key=value]... [--stations 32] [--chunk 16, or 0: chosen as drom offline's "auto"] [--ccx 1]
 // e.g. the quick flat plate:
 //   build/bench/station_update_bench cases/flat_plate.toml --set mesh.nx=20 --set mesh.ny=20 --set path.station_spacing=100
 #include "case/case.hpp"
 #include "fem/elastic_problem.hpp"
 #include "fem/supports.hpp"
 #include "offline/calculix_export.hpp"
+#include "offline/activity_history.hpp"
 #include "offline/machining_run.hpp"
+#include "offline/station_schedule.hpp"
 #include "offline/part_setup.hpp"
 #include "support/kernel_threads.hpp"
 #include "support/resources.hpp"
@@ -51,10 +53,12 @@ int main(int argc, char** argv) {
   const auto clamped = offline::clamp_dofs(c, part);
   offline::MachiningRun run(c, part);
   std::vector<std::vector<double>> history;
+  offline::ActivityHistory swept(static_cast<std::size_t>(part.mesh.element_count()));
   std::vector<double> remaining(static_cast<std::size_t>(part.mesh.element_count()), 1.0);
   for (std::size_t k = 0; k < run.stations().size() && static_cast<int>(k) < wanted; ++k) {
     run.advance(remaining);
     history.push_back(remaining);
+    swept.append(remaining);
   }
 
   const auto profiles = fem::unit_profiles(part.degrees);
@@ -65,6 +69,18 @@ int main(int argc, char** argv) {
   block.set_fixed_dofs(clamped);
   block.set_residual_bound(c.residual_bound);
   full.measure_full_residuals(true);
+  // --chunk 0: what drom offline chooses for these stations (solver.stations_per_factorization = "auto").
+  std::string estimates;
+  if (chunk == 0) {
+    const double flops = full.full_factorization_flops();
+    const auto choice = offline::choose_stations_per_factorization(swept, part.mesh, flops);
+    chunk = static_cast<int>(choice.chunk);
+    for (const auto& [C, cost] : choice.estimates) {
+      char entry[64];
+      std::snprintf(entry, sizeof entry, "%s\"%zu\": %.3f", estimates.empty() ? "" : ", ", C, cost / flops / static_cast<double>(history.size()));
+      estimates += entry;
+    }
+  }
 
   // The database's rows: the z displacement of the top face's nodes (drom offline's B1_top).
   std::vector<Eigen::Index> top;
@@ -108,6 +124,7 @@ int main(int argc, char** argv) {
   const double ns = static_cast<double>(history.size());
   std::printf("{\n  \"case\": \"%s\",\n  \"unknowns\": %d,\n  \"stations\": %zu,\n  \"chunk\": %d,\n  \"profiles\": %lld,\n", c.name.c_str(), part.mesh.dof_count(),
               history.size(), chunk, static_cast<long long>(P));
+  if (!estimates.empty()) std::printf("  \"chunk_chosen_from\": {%s},\n", estimates.c_str());
   std::printf("  \"full_s_per_station\": %.4f,\n  \"block_s_per_station\": %.4f,\n  \"speedup\": %.2f,\n", full_s / ns, block_s / ns, full_s / block_s);
   std::printf("  \"block\": {\"anchors\": %d, \"mean_block_dofs\": %.0f, \"refactorizations\": %d, \"full_chunks\": %d, \"residual_fallbacks\": %d,\n", b.anchors,
               static_cast<double>(b.block_dofs) / std::max(1, b.anchors), b.block_refactorizations, b.full_chunks, b.residual_fallbacks);

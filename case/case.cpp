@@ -39,7 +39,13 @@ void read_part(TomlReader& r, Case& c) {
 void read_solver(TomlReader& r, Case& c) {
   c.solver = r.choice("solver.kind", {"fe", "pgd"}, "fe");
   if (c.solver != "pgd") {
-    c.stations_per_factorization = static_cast<int>(r.integer("solver.stations_per_factorization", 1, 10000, c.stations_per_factorization));
+    // "auto" (0): chosen per job from the removal history (offline/station_schedule.hpp).
+    if (r.is_text("solver.stations_per_factorization")) {
+      r.choice("solver.stations_per_factorization", {"auto"});
+      c.stations_per_factorization = 0;
+    } else {
+      c.stations_per_factorization = static_cast<int>(r.integer("solver.stations_per_factorization", 1, 10000, c.stations_per_factorization));
+    }
     c.residual_bound = r.real("solver.residual_bound", Range::open(0, 1), c.residual_bound);
     for (const char* key : {"solver.residual_tolerance", "solver.increment_tolerance", "solver.fixed_point_tolerance", "solver.max_modes", "solver.max_fixed_point_iterations",
                             "solver.anderson_depth", "solver.max_update_functions", "solver.update_every", "solver.warm_start_truncation", "solver.indicator_tolerance", "solver.penalty"})

@@ -42,8 +42,9 @@ struct Case {
   double pgd_penalty = 1e8;     // clamp penalty, relative to 2G x smallest element size
   double pgd_indicator_tolerance = 1e-6;  // truncation of the material indicator's SVD
   // FE: a full factorization per this many stations; the others refactorize only the dofs the tool
-  // changes (docs/benchmarks.md). 1: a full factorization at every station.
-  int stations_per_factorization = 16;
+  // changes (docs/benchmarks.md). 1: a full factorization at every station; 0 ("auto", the default):
+  // chosen per job from the removal history (offline/station_schedule.hpp).
+  int stations_per_factorization = 0;
   // FE: a refactorized station whose relative residual max_p ||K u_p - f_p|| / ||f_p|| exceeds this is
   // solved again on a full factorization.
   double residual_bound = 1e-8;

@@ -170,12 +170,25 @@ void ElasticProblem::assemble_and_factorize() {
   block_current_ = false;
 }
 
+bool ElasticProblem::block_pays(double m, double full_flops) {
+  // A later station refactorizes S densely (m^3 / 3 flops) and keeps a few m x m matrices: past a
+  // quarter of a full factorization's flops, or 4 000 dofs (640 MB a worker), it would not pay.
+  return m * m * m / 3 <= 0.25 * full_flops && m <= 4000;
+}
+
+double ElasticProblem::full_factorization_flops() {
+  // The pattern is the held stiffness's (holding changes values, never the structure), and the
+  // ordering depends on the structure only.
+  if (base_ordering_.empty()) base_ordering_ = fill_reducing_ordering(pattern_.zero_matrix(), &full_flops_);
+  return full_flops_;
+}
+
 void ElasticProblem::assemble_and_factorize_anchor(const std::vector<char>& changing_elements) {
   if (static_cast<int>(changing_elements.size()) != mesh_.element_count())
     throw std::invalid_argument("assemble_and_factorize_anchor: one flag per element");
   block_current_ = false;
   K_ = held_stiffness(&anchor_scale_);
-  if (base_ordering_.empty()) base_ordering_ = fill_reducing_ordering(K_, &full_flops_);
+  full_factorization_flops();
   changing_ = changing_elements;
   block_index_.assign(static_cast<std::size_t>(mesh_.dof_count()), -1);
   std::vector<int> block;
@@ -188,10 +201,7 @@ void ElasticProblem::assemble_and_factorize_anchor(const std::vector<char>& chan
       block_index_[static_cast<std::size_t>(d)] = static_cast<int>(block.size());
       block.push_back(d);
     }
-  // A later station refactorizes S densely (m^3 / 3 flops) and keeps a few m x m matrices: past a
-  // quarter of a full factorization's flops, or 4 000 dofs (640 MB a worker), it would not pay.
-  const double m = static_cast<double>(block.size());
-  if (!(m * m * m / 3 <= 0.25 * full_flops_ && block.size() <= 4000)) {
+  if (!block_pays(static_cast<double>(block.size()), full_flops_)) {
     ++block_stats_.full_chunks;
     solver_.factorize(K_);
     return;

@@ -74,6 +74,13 @@ class ElasticProblem {
   // quarter of a full one (or hold more than 4 000 dofs), factorizes in full instead, and the run's
   // stations do too.
   void assemble_and_factorize_anchor(const std::vector<char>& changing_elements);
+  // Whether a block of this many dofs pays against a full factorization of `full_flops`: the rule
+  // assemble_and_factorize_anchor applies (its dense refactorization, m^3 / 3 flops, within a
+  // quarter of a full one, and m <= 4 000).
+  static bool block_pays(double block_dofs, double full_flops);
+  // The flops of a full factorization of this problem's stiffness pattern in the fill-reducing order
+  // the anchors use (one symbolic analysis, kept).
+  double full_factorization_flops();
   // Step 3 for a later station of that run. The activity may differ from the anchor's only on the
   // changing elements (std::logic_error otherwise). Without an anchor: assemble_and_factorize().
   void refactorize_changed();

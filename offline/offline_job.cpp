@@ -456,8 +456,11 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
     solvers = StationSolvers::create(c, part, profiles, clamped, groups);
     return solvers->equilibrium();
   });
+  nlohmann::json chunk_plan;
   on_every_rank(team, [&] {
     if (!team.root()) solvers = StationSolvers::create(c, part, profiles, clamped, groups, equilibrium);
+    // Every rank from the same history and pattern: the same chunks everywhere.
+    chunk_plan = solvers->plan(history);
   });
   const double equilibrium_seconds = elapsed() - removal_seconds;
 
@@ -668,6 +671,7 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
                                     {"solver", c.solver},
                                     {"solver_statistics", solver_statistics},
                                     {"equilibrium", solvers->equilibrium_statistics()},
+                                    {"chunk_plan", chunk_plan},
                                     {"equilibrium_time_s", equilibrium_seconds},
                                     {"deal_measured_stations", measured_stations},
                                     {"pass_outputs", modes}}));

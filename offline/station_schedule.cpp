@@ -119,4 +119,37 @@ std::vector<std::vector<ChunkTask>> deal_blocks(const std::vector<ChunkTask>& ta
   return blocks;
 }
 
+ChunkChoice choose_stations_per_factorization(const ActivityHistory& history, const fem::Mesh& mesh, double full_flops) {
+  constexpr double kOverhead = 0.1;
+  const std::size_t ns = history.stations();
+  ChunkChoice choice;
+  double best = 0;
+  std::vector<int> mark(static_cast<std::size_t>(mesh.node_count()), -1);
+  int stamp = 0;
+  for (std::size_t C = 1; C <= 64; C *= 2) {
+    double total = 0;
+    for (std::size_t first = 0; first < ns; first += C) {
+      const std::size_t last = std::min(ns, first + C);
+      const double len = static_cast<double>(last - first);
+      double m = 0;
+      if (C > 1) {
+        const auto changing = history.changing(first, last);
+        ++stamp;
+        for (int e = 0; e < mesh.element_count(); ++e)
+          if (changing[static_cast<std::size_t>(e)])
+            for (int n : mesh.element(e))
+              if (mark[static_cast<std::size_t>(n)] != stamp) mark[static_cast<std::size_t>(n)] = stamp, m += 3;
+      }
+      if (C > 1 && fem::ElasticProblem::block_pays(m, full_flops))
+        total += full_flops + len * (m * m * m / 3 + kOverhead * full_flops);
+      else
+        total += len * (1 + kOverhead) * full_flops;
+    }
+    choice.estimates.emplace_back(C, total);
+    // Only a real gain moves to a larger C: where no block pays, every C sums the same costs.
+    if (C == 1 || total < best * (1 - 1e-9)) best = total, choice.chunk = C;
+  }
+  return choice;
+}
+
 }  // namespace drom::offline

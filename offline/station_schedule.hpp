@@ -4,6 +4,7 @@
 // the largest block's estimated cost as small as it can be. A station's cost is estimated from the
 // material left at it (docs/distributed.md): late stations have less material and cost less; where
 // stations were solved before, their measured times calibrate the estimate.
+#include "fem/mesh.hpp"
 #include "offline/activity_history.hpp"
 
 #include <cstddef>
@@ -47,6 +48,23 @@ std::vector<double> calibrated_costs(const std::vector<double>& law, const std::
 // says is missing; each ends after its last missing station.
 std::vector<ChunkTask> chunk_tasks(std::size_t stations, std::size_t chunk, const std::function<bool(std::size_t)>& wanted,
                                    const std::vector<double>& costs);
+
+// The FE's stations per factorization for a job (solver.stations_per_factorization = "auto"), from
+// its removal history: of the candidates 1, 2, 4, ..., 64, the one with the least estimated cost of
+// all the stations. Per chunk of C stations with m dofs in its changing elements, in flops (F: a
+// full factorization's, fem::ElasticProblem::full_factorization_flops):
+//   the block pays (fem::ElasticProblem::block_pays): F + m^3/3 + kOverhead F for its first station,
+//                                                     m^3/3 + kOverhead F for each other one;
+//   it does not:                                      (1 + kOverhead) F for every station.
+// kOverhead (0.1) stands for what a station costs besides factorizing: assembly, the solves and the
+// residual check (measured 0.07 to 0.12 of a full factorization's time, docs/benchmarks.md). Larger C
+// spreads the first station's F over more stations but grows m; past the rule's limit a chunk pays
+// nothing. Ties go to the smaller C. The estimates are kept, for summary.json.
+struct ChunkChoice {
+  std::size_t chunk = 1;
+  std::vector<std::pair<std::size_t, double>> estimates;  // (C, estimated flops of the whole job)
+};
+ChunkChoice choose_stations_per_factorization(const ActivityHistory& history, const fem::Mesh& mesh, double full_flops);
 
 // The tasks in `ranks` contiguous blocks, in order, minimising the largest block's cost; block 0
 // also carries `root_extra` (rank 0's own work after the stations: the final shape). Blocks may be

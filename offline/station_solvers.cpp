@@ -3,9 +3,12 @@
 #include "fem/elastic_problem.hpp"
 #include "fem/supports.hpp"
 #include "fem/vtk_output.hpp"
+#include "offline/station_schedule.hpp"
+#include "support/resources.hpp"
 #include "pgd/pgd_problem.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <stdexcept>
 
 namespace drom::offline {
@@ -112,7 +115,8 @@ class FeSolvers final : public StationSolvers {
       : part_(part),
         profiles_(profiles),
         clamped_(clamped),
-        chunk_(static_cast<std::size_t>(c.stations_per_factorization)),
+        chunk_(static_cast<std::size_t>(std::max(1, c.stations_per_factorization))),
+        automatic_(c.stations_per_factorization == 0),
         residual_bound_(c.residual_bound),
         base_(part.mesh, part.shape, part.material, profiles) {
     if (!groups.empty()) base_.set_profile_groups(groups);
@@ -126,6 +130,20 @@ class FeSolvers final : public StationSolvers {
     return std::make_unique<FeStation>(part_, profiles_, clamped_, base_, residual_bound_);
   }
   std::size_t chunk() const override { return chunk_; }
+  nlohmann::json plan(const ActivityHistory& history) override {
+    if (!automatic_) return {{"stations_per_factorization", chunk_}, {"chosen", false}};
+    const auto start = std::chrono::steady_clock::now();
+    const double flops = base_.full_factorization_flops();
+    const auto choice = choose_stations_per_factorization(history, part_.mesh, flops);
+    chunk_ = choice.chunk;
+    nlohmann::json estimates = nlohmann::json::object();
+    for (const auto& [C, cost] : choice.estimates) estimates[std::to_string(C)] = cost / (flops * static_cast<double>(history.stations()));
+    return {{"stations_per_factorization", chunk_},
+            {"chosen", true},
+            {"full_factorization_flops", flops},
+            {"estimated_cost_per_station_in_full_factorizations", estimates},
+            {"plan_s", seconds_since(start)}};
+  }
   nlohmann::json equilibrium_statistics() const override { return {{"factorize_s", base_.solver_stats().factorize_seconds}}; }
 
  private:
@@ -133,6 +151,7 @@ class FeSolvers final : public StationSolvers {
   std::vector<fem::StressProfile> profiles_;
   std::vector<int> clamped_;
   std::size_t chunk_;
+  bool automatic_;  // solver.stations_per_factorization = "auto": plan() chooses chunk_
   double residual_bound_;
   fem::ElasticProblem base_;
 };

@@ -2,6 +2,7 @@
 // The machining states of drom offline / truth, solved by the case's solver: the 3D FE core
 // (solver.kind = "fe") or the plane x thickness PGD (solver.kind = "pgd"). Both equilibrate the stock
 // once; each worker thread then gets its own solver of the clamped states.
+#include "offline/activity_history.hpp"
 #include "offline/part_setup.hpp"
 
 #include <nlohmann/json.hpp>
@@ -55,10 +56,14 @@ class StationSolvers {
   virtual std::unique_ptr<StationSolver> make_worker() const = 0;
   // Stations a worker takes at a time and solves in order: the FE factorizes a chunk's first station
   // and refactorizes only what the tool changes at the others (solver.stations_per_factorization,
-  // 1: a full factorization per station); the PGD warm-starts each station from the previous one.
+  // 1: a full factorization per station; "auto": plan()'s choice); the PGD warm-starts each station from the previous one.
   // Chunks start cold, so the results do not depend on the thread count nor on where a run was
   // interrupted.
   virtual std::size_t chunk() const = 0;
+  // Before chunk() is asked, on every rank: the job's removal history, from which the FE chooses its
+  // stations per factorization when the case says "auto" (offline/station_schedule.hpp). Returns
+  // what it chose, for summary.json (empty: nothing to choose).
+  virtual nlohmann::json plan(const ActivityHistory& history) { (void)history; return nlohmann::json::object(); }
   virtual nlohmann::json equilibrium_statistics() const = 0;
   // The equilibrated stock as bytes for create(); empty when the solver cannot hand it over (the PGD's
   // separated fields: each rank equilibrates on its own, with the same bytes as a result).

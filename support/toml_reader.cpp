@@ -120,6 +120,11 @@ void TomlReader::fail(const std::string& key, const std::string& message) const 
 
 bool TomlReader::has(const std::string& key) const { return impl_->find(key) != nullptr; }
 
+bool TomlReader::is_text(const std::string& key) const {
+  const auto* node = impl_->find(key);
+  return node && node->is_string();
+}
+
 namespace {
 std::string show(const toml::node& node) {
   std::ostringstream s;

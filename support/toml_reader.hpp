@@ -34,6 +34,8 @@ class TomlReader {
   void apply_override(const std::string& assignment);
 
   bool has(const std::string& key) const;
+  // The key is present and holds a string (for keys that take a number or a word such as "auto").
+  bool is_text(const std::string& key) const;
   double real(const std::string& key, Range range);
   double real(const std::string& key, Range range, double fallback);
   long long integer(const std::string& key, long long min, long long max);

@@ -89,6 +89,15 @@ TEST(CaseFile, SolverSectionChoosesPgdWithItsTolerances) {
   EXPECT_NE(error_of({"solver.kind=pgd", "mesh.element=hex27", "solver.residual_tolerance=2"}).find("solver.residual_tolerance"), std::string::npos);
 }
 
+TEST(CaseFile, StationsPerFactorizationIsAutoByDefaultOrACount) {
+  EXPECT_EQ(load_case(std::nullopt, {}).stations_per_factorization, 0);  // "auto"
+  EXPECT_EQ(load_case(std::nullopt, {"solver.stations_per_factorization='auto'"}).stations_per_factorization, 0);
+  EXPECT_EQ(load_case(std::nullopt, {"solver.stations_per_factorization=8"}).stations_per_factorization, 8);
+  EXPECT_NE(error_of({"solver.stations_per_factorization='often'"}).find("solver.stations_per_factorization"), std::string::npos);
+  EXPECT_NE(error_of({"solver.stations_per_factorization='often'"}).find("\"auto\""), std::string::npos);
+  EXPECT_NE(error_of({"solver.stations_per_factorization=0"}).find("solver.stations_per_factorization"), std::string::npos);
+}
+
 TEST(CaseFile, WrongTypesMissingFieldsAndRangesNameTheKeyAndLine) {
   EXPECT_NE(error_of({"mesh.nx=2.5"}).find("--set mesh.nx: expected an integer"), std::string::npos);
   EXPECT_NE(error_of({"part.thickness='thick'"}).find("part.thickness: expected a number"), std::string::npos);

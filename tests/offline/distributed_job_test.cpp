@@ -30,9 +30,12 @@ namespace fs = std::filesystem;
 // The coarse flat plate at its coarsest: 5 x 5 x 5 Hex20 (200 mm elements: the pocket's walls at
 // 200 and 800 mm and its floor at 8 mm stay on element faces), 2 mm voxels, a station every 900 mm
 // of cut: 33 stations, enough to split three ways and between ranks, a few hundredths of a second each.
+// Chunks of 4 stations: the killed rank's test needs rank 1 to own several chunks ("auto" takes all 33
+// stations in one chunk on this little mesh); the truth test runs "auto".
 const std::string kPlate =
     " --set mesh.nx=5 --set mesh.ny=5 --set path.station_spacing=900 --set removal.voxel_size=2.0"
-    " --set clamps.0.box=[0,100,0,100] --set clamps.1.box=[900,1000,0,100] --set clamps.2.box=[0,100,900,1000] --set clamps.3.box=[900,1000,900,1000]";
+    " --set clamps.0.box=[0,100,0,100] --set clamps.1.box=[900,1000,0,100] --set clamps.2.box=[0,100,900,1000] --set clamps.3.box=[900,1000,900,1000]"
+    " --set solver.stations_per_factorization=4";
 constexpr std::size_t kStations = 33;
 
 // This build's scratch folder (ctest runs tests side by side, and other builds may run theirs).
@@ -130,9 +133,9 @@ pid_t rank_pid(pid_t launcher, int rank) {
 
 // `command` on two ranks of one thread: rank 0 alone reports and writes, and its database is
 // `serial`'s bytes.
-void two_ranks_write_the_serial_bytes(const std::string& command, const std::string& serial) {
+void two_ranks_write_the_serial_bytes(const std::string& command, const std::string& serial, const std::string& extra = "") {
   const auto out = dir("two_ranks_" + command);
-  const auto r = mpirun(2, command + kPlate + " --threads 1 --out " + out.string());
+  const auto r = mpirun(2, command + kPlate + extra + " --threads 1 --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(count(r.output, "-> " + out.string() + "/database.h5"), 1u) << r.output;
   const std::string last = "station " + std::to_string(kStations) + "/" + std::to_string(kStations);
@@ -144,11 +147,15 @@ void two_ranks_write_the_serial_bytes(const std::string& command, const std::str
 
 TEST(Distributed, TwoRanksWriteTheSerialDatabaseByteForByte) { two_ranks_write_the_serial_bytes("offline", serial_offline_database()); }
 
-// The same for drom truth (its serial run here: one profile, cheap),
+// The same for drom truth (its serial run here: one profile, cheap), with the chunk chosen by each
+// rank from the history ("auto"): every rank chooses the same,
 TEST(Distributed, TwoRanksWriteTheSerialTruthDatabaseByteForByte) {
   const auto truth = dir("truth_serial");
-  ASSERT_EQ(run("truth" + kPlate + " --threads 1 --out " + truth.string()), "");
-  two_ranks_write_the_serial_bytes("truth", bytes(truth / "database.h5"));
+  const std::string automatic = " --set solver.stations_per_factorization=auto";
+  ASSERT_EQ(run("truth" + kPlate + automatic + " --threads 1 --out " + truth.string()), "");
+  EXPECT_TRUE(summary(truth)["chunk_plan"]["chosen"].get<bool>());
+  EXPECT_GT(summary(truth)["chunk_plan"]["stations_per_factorization"].get<int>(), 4);
+  two_ranks_write_the_serial_bytes("truth", bytes(truth / "database.h5"), automatic);
 }
 
 // and for drom run's offline-and-truth pass (slow, ctest -L slow: the loop after the pass, on rank 0,

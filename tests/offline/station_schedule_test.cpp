@@ -2,6 +2,7 @@
 // the removal history rank 0 hands the others.
 #include "offline/activity_history.hpp"
 #include "offline/station_schedule.hpp"
+#include "fem/structured_mesh.hpp"
 #include "support/input_error.hpp"
 
 #include <gtest/gtest.h>
@@ -137,4 +138,53 @@ TEST(ActivityHistory, ReplaysEveryStationBitForBitFromItsBytes) {
   std::string broken = history.bytes();
   broken.resize(broken.size() - 3);
   EXPECT_THROW(ActivityHistory::from_bytes(broken, "test"), drom::InputError);
+}
+
+namespace {
+
+// A 16 x 16 x 2 plate whose top layer the tool crosses row by row, `per_station` elements a station.
+ActivityHistory sweep(const drom::fem::Mesh& mesh, int per_station) {
+  ActivityHistory history(static_cast<std::size_t>(mesh.element_count()));
+  std::vector<double> remaining(static_cast<std::size_t>(mesh.element_count()), 1.0);
+  std::vector<int> top;
+  for (int e = 0; e < mesh.element_count(); ++e)
+    if (mesh.centroid(e).z() > 1.0) top.push_back(e);
+  for (std::size_t i = 0; i < top.size(); i += static_cast<std::size_t>(per_station)) {
+    for (std::size_t j = i; j < std::min(top.size(), i + static_cast<std::size_t>(per_station)); ++j) remaining[static_cast<std::size_t>(top[j])] = 0.3;
+    history.append(remaining);
+  }
+  return history;
+}
+
+}  // namespace
+
+TEST(StationSchedule, StationsPerFactorizationFollowTheBlockCostModel) {
+  const auto shape = drom::levelset::PartShape::plate(160, 160, 2);
+  const auto mesh = drom::fem::make_structured_hex_mesh(shape, {16, 16, 2, 1.0});
+  const auto history = sweep(mesh, 2);  // 128 stations of 2 elements
+  // A full factorization far dearer than any block: the largest chunk, whose first station is the
+  // only full one (the model's own sum, checked at C = 64: 2 chunks, and 0.1 F a station besides).
+  const double huge = 1e15;
+  auto choice = choose_stations_per_factorization(history, mesh, huge);
+  EXPECT_EQ(choice.chunk, 64u);
+  ASSERT_EQ(choice.estimates.size(), 7u);
+  EXPECT_EQ(choice.estimates.front().first, 1u);
+  EXPECT_DOUBLE_EQ(choice.estimates.front().second, 128 * 1.1 * huge);
+  EXPECT_NEAR(choice.estimates.back().second, (2 + 128 * 0.1) * huge, 0.01 * huge);
+  // Each estimate falls as C grows while blocks stay cheap.
+  for (std::size_t i = 1; i < choice.estimates.size(); ++i) EXPECT_LT(choice.estimates[i].second, choice.estimates[i - 1].second);
+
+  // A full factorization so cheap that no block of two elements pays (m = 3 x 32 nodes = 96 dofs:
+  // m^3/3 > F/4 for F < 1.2e6): one full factorization a station, every C costing the same (ties
+  // go to the smaller C).
+  choice = choose_stations_per_factorization(history, mesh, 1e5);
+  EXPECT_EQ(choice.chunk, 1u);
+  for (const auto& [C, cost] : choice.estimates) EXPECT_DOUBLE_EQ(cost, 128 * 1.1 * 1e5) << C;
+
+  // In between, the growth of m with C bounds the chunk: blocks pay up to some C, not beyond.
+  choice = choose_stations_per_factorization(history, mesh, 3e8);
+  EXPECT_GT(choice.chunk, 1u);
+  EXPECT_LT(choice.chunk, 64u);
+  const auto best = std::min_element(choice.estimates.begin(), choice.estimates.end(), [](auto& a, auto& b) { return a.second < b.second; });
+  EXPECT_EQ(best->first, choice.chunk);
 }
