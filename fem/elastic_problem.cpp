@@ -73,6 +73,7 @@ void ElasticProblem::equilibrate(const std::vector<int>& isostatic_dofs) {
   for (int d : isostatic_dofs) rhs.row(d).setZero();
   solver_.factorize(Kheld);
   u0_ = solve_by_group(rhs);
+  element_loads_.clear();
 
   // The profile is self-equilibrated, so the 3-2-1 reactions vanish and r0 is solver noise; it is
   // kept and subtracted so the load below equals -sum_e a_e int B^T sigma0 literally.
@@ -89,6 +90,7 @@ void ElasticProblem::adopt_equilibrium(const ElasticProblem& other) {
     throw std::invalid_argument("adopt_equilibrium: the other problem must be equilibrated on the same mesh and profiles");
   group_sizes_ = other.group_sizes_;
   u0_ = other.u0_;
+  element_loads_.clear();
   r0_ = other.r0_;
   relative_residual_ = other.relative_residual_;
   equilibrated_ = true;
@@ -114,6 +116,7 @@ void ElasticProblem::adopt_equilibrium(std::string_view bytes) {
     throw std::invalid_argument("adopt_equilibrium: the bytes are not an equilibrium of this mesh and these profiles");
   group_sizes_.assign(groups.begin(), groups.end());
   u0_ = std::move(u0);
+  element_loads_.clear();
   r0_ = std::move(r0);
   relative_residual_ = residual;
   equilibrated_ = true;
@@ -261,10 +264,12 @@ void ElasticProblem::refactorize_changed() {
   ++block_stats_.block_refactorizations;
 }
 
-Eigen::MatrixXd ElasticProblem::element_load(int e) {
-  const Eigen::MatrixXd fR = stress_load(e);
+const Eigen::MatrixXd& ElasticProblem::element_load(int e) {
+  if (element_loads_.empty()) element_loads_.resize(static_cast<std::size_t>(mesh_.element_count()));
+  Eigen::MatrixXd& fe = element_loads_[static_cast<std::size_t>(e)];
+  if (fe.size() > 0) return fe;
+  fe = stress_load(e);
   const Eigen::MatrixXd& Ke = operators_.stiffness(e);
-  Eigen::MatrixXd fe = fR;
   for (Eigen::Index p = 0; p < fe.cols(); ++p) fe.col(p) += Ke * gather(e, u0_.col(p));
   return fe;
 }
@@ -277,7 +282,7 @@ Eigen::MatrixXd ElasticProblem::solve() {
   for (int e = 0; e < mesh_.element_count(); ++e) {
     const double removed = 1.0 - activity_[static_cast<std::size_t>(e)];
     if (removed <= 0) continue;
-    const Eigen::MatrixXd fe = element_load(e);
+    const Eigen::MatrixXd& fe = element_load(e);
     const auto nodes = mesh_.element(e);
     for (std::size_t a = 0; a < nodes.size(); ++a) F.middleRows<3>(3 * nodes[a]) += removed * fe.middleRows<3>(3 * static_cast<Eigen::Index>(a));
   }

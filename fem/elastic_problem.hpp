@@ -122,7 +122,9 @@ class ElasticProblem {
 
  private:
   Eigen::SparseMatrix<double> assemble_stiffness(const std::vector<double>& fraction);
-  Eigen::MatrixXd element_load(int e);  // f_R,e + K_e u0_e per profile (3n x P)
+  // f_R,e + K_e u0_e per profile (3n x P), computed once per element and kept: every station loads
+  // all the material removed so far, so without the cache a late station recomputes hundreds.
+  const Eigen::MatrixXd& element_load(int e);
   Eigen::MatrixXd stress_load(int e) const;  // f_R,e per profile, group by group
   Eigen::MatrixXd solve_by_group(const Eigen::MatrixXd& rhs);
   // Calls f(first, count) for each group of profiles, in order.
@@ -167,6 +169,7 @@ class ElasticProblem {
   std::vector<char> orphan_;
   Eigen::SparseMatrix<double> K_;
   Eigen::MatrixXd u0_, r0_;
+  std::vector<Eigen::MatrixXd> element_loads_;  // element_load's, empty until asked; reset with u0_
   double relative_residual_ = 0;
   double assembly_seconds_ = 0;
   bool equilibrated_ = false;
