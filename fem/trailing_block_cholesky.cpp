@@ -7,9 +7,57 @@
 #include <algorithm>
 #include <chrono>
 #include <iterator>
+#include <limits>
+#include <string>
 #include <stdexcept>
 
+// LAPACK and BLAS, Fortran interfaces (no LAPACKE in Debian's base packages): the trailing size_t
+// arguments are the hidden lengths of the character arguments.
+extern "C" {
+void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* info, std::size_t uplo_length);
+void dpotrs_(const char* uplo, const int* n, const int* nrhs, const double* a, const int* lda, double* b, const int* ldb, int* info,
+             std::size_t uplo_length);
+void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha, const double* a, const int* lda, const double* beta,
+            double* c, const int* ldc, std::size_t uplo_length, std::size_t trans_length);
+}
+
 namespace drom::fem {
+
+namespace lapack {
+namespace {
+
+int size_of(Eigen::Index n) {
+  if (n > std::numeric_limits<int>::max()) throw std::length_error("LAPACK: matrix too large");
+  return static_cast<int>(n);
+}
+
+// A = L L^T in place (the lower triangle; the strict upper one is left as it was). False if A is not
+// positive definite.
+bool cholesky_lower(Eigen::MatrixXd& a) {
+  const int n = size_of(a.rows());
+  int info = 0;
+  if (n > 0) dpotrf_("L", &n, a.data(), &n, &info, 1);
+  if (info < 0) throw std::logic_error("dpotrf: bad argument " + std::to_string(-info));
+  return info == 0;
+}
+
+// B := (L L^T)^-1 B with L from cholesky_lower.
+void cholesky_solve(const Eigen::MatrixXd& factor, Eigen::MatrixXd& b) {
+  const int n = size_of(factor.rows()), nrhs = size_of(b.cols());
+  int info = 0;
+  if (n > 0 && nrhs > 0) dpotrs_("L", &n, &nrhs, factor.data(), &n, b.data(), &n, &info, 1);
+  if (info != 0) throw std::logic_error("dpotrs: bad argument " + std::to_string(-info));
+}
+
+// The lower triangle of C := L L^T (C is n x n, L n x n).
+void lower_times_transpose(const Eigen::MatrixXd& lower, Eigen::MatrixXd& c) {
+  const int n = size_of(lower.rows());
+  const double one = 1, zero = 0;
+  if (n > 0) dsyrk_("L", "N", &n, &n, &one, lower.data(), &n, &zero, c.data(), &n, 1, 1);
+}
+
+}  // namespace
+}  // namespace lapack
 
 struct TrailingBlockCholesky::Cholmod {
   cholmod_common common;
@@ -113,7 +161,7 @@ bool TrailingBlockCholesky::factorize_anchor(const Eigen::SparseMatrix<double>& 
         lower_bb_(rows[pi[s] + r] - first, col - first) = x[px[s] + static_cast<std::ptrdiff_t>(col - c0) * height + r];
   }
   schur_anchor_ = Eigen::MatrixXd::Zero(m, m);
-  schur_anchor_.selfadjointView<Eigen::Lower>().rankUpdate(lower_bb_);
+  lapack::lower_times_transpose(lower_bb_, schur_anchor_);
   schur_anchor_ = schur_anchor_.selfadjointView<Eigen::Lower>();
   schur_is_anchor_ = true;
   anchor_seconds_ += seconds_since(t0);
@@ -123,10 +171,11 @@ bool TrailingBlockCholesky::factorize_anchor(const Eigen::SparseMatrix<double>& 
 bool TrailingBlockCholesky::refactorize(const Eigen::MatrixXd& schur) {
   if (schur.rows() != block_size() || schur.cols() != block_size()) throw std::invalid_argument("TrailingBlockCholesky: S must be m x m");
   const auto t0 = std::chrono::steady_clock::now();
-  Eigen::LLT<Eigen::MatrixXd> next(schur);
+  Eigen::MatrixXd next = schur;
+  const bool positive = lapack::cholesky_lower(next);
   refactorize_seconds_ += seconds_since(t0);
-  if (next.info() != Eigen::Success) return false;
-  schur_ = std::move(next);
+  if (!positive) return false;
+  schur_factor_ = std::move(next);
   schur_is_anchor_ = false;
   return true;
 }
@@ -165,7 +214,8 @@ Eigen::MatrixXd TrailingBlockCholesky::solve(const Eigen::MatrixXd& rhs) {
     // S is the anchor's, L_BB L_BB^T: the backward solve below finishes x_B itself.
     y.bottomRows(m) = lower_bb_.triangularView<Eigen::Lower>().solve(f_b);
   } else {
-    x_b = schur_.solve(f_b);
+    x_b = f_b;
+    lapack::cholesky_solve(schur_factor_, x_b);
     y.bottomRows(m) = lower_bb_.triangularView<Eigen::Lower>().transpose() * x_b;
   }
   cholmod_dense backward_in = Eigen::viewAsCholmod(y);

@@ -55,7 +55,7 @@ class TrailingBlockCholesky {
   std::vector<int> block_;
   Eigen::MatrixXd lower_bb_;        // L_BB of the anchor
   Eigen::MatrixXd schur_anchor_;    // L_BB L_BB^T
-  Eigen::LLT<Eigen::MatrixXd> schur_;  // of the current S, unless it is the anchor's (L_BB is its factor)
+  Eigen::MatrixXd schur_factor_;    // LAPACK's Cholesky factor of the current S (lower), unless S is the anchor's (L_BB is its factor)
   bool schur_is_anchor_ = true;
   struct KeptForward {
     Eigen::MatrixXd f_r, forward;  // f_R and the forward solve of [f_R; 0]
