@@ -94,6 +94,11 @@ void ElasticProblem::adopt_equilibrium(const ElasticProblem& other) {
   r0_ = other.r0_;
   relative_residual_ = other.relative_residual_;
   equilibrated_ = true;
+  // The same mesh has the same pattern: its ordering, if the other has one, is this one's too.
+  if (!other.base_ordering_.empty()) {
+    base_ordering_ = other.base_ordering_;
+    full_flops_ = other.full_flops_;
+  }
 }
 
 std::string ElasticProblem::equilibrium_bytes() const {
@@ -160,10 +165,10 @@ Eigen::SparseMatrix<double> ElasticProblem::held_stiffness(double* scale) {
   return K;
 }
 
-std::vector<std::pair<int, double>> ElasticProblem::changes_since_anchor() const {
+std::vector<std::pair<int, double>> ElasticProblem::changes_since(const std::vector<double>& then) const {
   std::vector<std::pair<int, double>> changes;
   for (int e = 0; e < mesh_.element_count(); ++e)
-    if (const double delta = activity_[static_cast<std::size_t>(e)] - anchor_activity_[static_cast<std::size_t>(e)]; delta != 0) changes.emplace_back(e, delta);
+    if (const double delta = activity_[static_cast<std::size_t>(e)] - then[static_cast<std::size_t>(e)]; delta != 0) changes.emplace_back(e, delta);
   return changes;
 }
 
@@ -173,10 +178,52 @@ void ElasticProblem::assemble_and_factorize() {
   block_current_ = false;
 }
 
-bool ElasticProblem::block_pays(double m, double full_flops) {
-  // A later station refactorizes S densely (m^3 / 3 flops) and keeps a few m x m matrices: past a
-  // quarter of a full factorization's flops, or 4 000 dofs (640 MB a worker), it would not pay.
-  return m * m * m / 3 <= 0.25 * full_flops && m <= 4000;
+BlockPlan ElasticProblem::plan_block(const Mesh& mesh, const RunChanges& changes) {
+  if (static_cast<int>(changes.last.size()) != mesh.element_count() || changes.first.size() != changes.last.size())
+    throw std::invalid_argument("plan_block: one first and one last change per element");
+  // Per node: the last station that changes it, and the first (of the elements last changed then).
+  std::vector<int> node_last(static_cast<std::size_t>(mesh.node_count()), 0), node_first(node_last.size(), 0);
+  BlockPlan plan;
+  for (int e = 0; e < mesh.element_count(); ++e) {
+    const auto i = static_cast<std::size_t>(e);
+    const int last = changes.last[i], first = changes.first[i];
+    if (last <= 0) continue;
+    if (first <= 0 || first > last) throw std::invalid_argument("plan_block: an element's first change must come before its last");
+    plan.stations = std::max(plan.stations, last + 1);
+    for (int n : mesh.element(e)) {
+      const auto k = static_cast<std::size_t>(n);
+      if (last > node_last[k]) node_last[k] = last, node_first[k] = first;
+      else if (last == node_last[k]) node_first[k] = std::min(node_first[k], first);
+    }
+  }
+  std::vector<int> nodes;
+  for (int n = 0; n < mesh.node_count(); ++n)
+    if (node_last[static_cast<std::size_t>(n)] > 0) nodes.push_back(n);
+  std::stable_sort(nodes.begin(), nodes.end(), [&](int a, int b) {
+    const auto i = static_cast<std::size_t>(a), j = static_cast<std::size_t>(b);
+    return node_last[i] != node_last[j] ? node_last[i] < node_last[j] : node_first[i] > node_first[j];
+  });
+  std::vector<int> count(static_cast<std::size_t>(plan.stations) + 1, 0);
+  for (int n : nodes) {
+    ++count[static_cast<std::size_t>(node_last[static_cast<std::size_t>(n)])];
+    for (int c = 0; c < 3; ++c) plan.dofs.push_back(3 * n + c);
+  }
+  // Station j refactorizes at most the dofs last changed at j or later (t of them); it forms their T
+  // from the last one's, subtracting the columns that left (t^2 k), or from the factor (t^3 / 3).
+  double previous = static_cast<double>(plan.dofs.size());
+  double t = previous;
+  for (int j = 1; j < plan.stations; ++j) {
+    if (j > 1) t -= 3.0 * count[static_cast<std::size_t>(j - 1)];
+    const double form = j == 1 ? t * t * t / 3 : std::min(t * t * (previous - t), t * t * t / 3);
+    plan.refactorization_flops += t * t * t / 3 + form;
+    previous = t;
+  }
+  return plan;
+}
+
+bool ElasticProblem::block_pays(const BlockPlan& plan, double full_flops) {
+  const double m = static_cast<double>(plan.dofs.size());
+  return m <= 4000 && full_flops + m * m * m / 3 + plan.refactorization_flops < plan.stations * full_flops;
 }
 
 double ElasticProblem::full_factorization_flops() {
@@ -186,32 +233,22 @@ double ElasticProblem::full_factorization_flops() {
   return full_flops_;
 }
 
-void ElasticProblem::assemble_and_factorize_anchor(const std::vector<char>& changing_elements) {
-  if (static_cast<int>(changing_elements.size()) != mesh_.element_count())
-    throw std::invalid_argument("assemble_and_factorize_anchor: one flag per element");
+void ElasticProblem::assemble_and_factorize_anchor(const RunChanges& changes) {
   block_current_ = false;
   K_ = held_stiffness(&anchor_scale_);
   full_factorization_flops();
-  changing_ = changing_elements;
-  block_index_.assign(static_cast<std::size_t>(mesh_.dof_count()), -1);
-  std::vector<int> block;
-  for (int e = 0; e < mesh_.element_count(); ++e)
-    if (changing_[static_cast<std::size_t>(e)])
-      for (int n : mesh_.element(e))
-        for (int c = 0; c < 3; ++c) block_index_[static_cast<std::size_t>(3 * n + c)] = 0;
-  for (int d = 0; d < mesh_.dof_count(); ++d)
-    if (block_index_[static_cast<std::size_t>(d)] == 0) {
-      block_index_[static_cast<std::size_t>(d)] = static_cast<int>(block.size());
-      block.push_back(d);
-    }
-  if (!block_pays(static_cast<double>(block.size()), full_flops_)) {
+  const BlockPlan plan = plan_block(mesh_, changes);
+  last_change_ = changes.last;
+  if (!block_pays(plan, full_flops_)) {
     ++block_stats_.full_chunks;
     solver_.factorize(K_);
     return;
   }
+  block_index_.assign(static_cast<std::size_t>(mesh_.dof_count()), -1);
+  for (std::size_t b = 0; b < plan.dofs.size(); ++b) block_index_[static_cast<std::size_t>(plan.dofs[b])] = static_cast<int>(b);
   if (!block_) block_ = std::make_unique<TrailingBlockCholesky>();
   const double seconds_before = block_->anchor_seconds();
-  block_current_ = block_->factorize_anchor(K_, block, base_ordering_);
+  block_current_ = block_->factorize_anchor(K_, plan.dofs, base_ordering_);
   block_stats_.anchor_seconds += block_->anchor_seconds() - seconds_before;
   if (!block_current_) {
     ++block_stats_.full_chunks;
@@ -219,8 +256,21 @@ void ElasticProblem::assemble_and_factorize_anchor(const std::vector<char>& chan
     return;
   }
   ++block_stats_.anchors;
-  block_stats_.block_dofs += static_cast<long long>(block.size());
-  anchor_activity_ = activity_;
+  block_stats_.block_dofs += static_cast<long long>(plan.dofs.size());
+  block_solves_ = 0;
+  // K's block rows, both triangles, for block_row_residuals.
+  std::vector<Eigen::Triplet<double>> rows;
+  rows.reserve(static_cast<std::size_t>(64 * plan.dofs.size()));
+  for (Eigen::Index c = 0; c < K_.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(K_, c); it; ++it) {
+      const auto r = it.row();
+      if (const int b = block_index_[static_cast<std::size_t>(r)]; b >= 0) rows.emplace_back(b, static_cast<int>(c), it.value());
+      if (const int b = block_index_[static_cast<std::size_t>(c)]; b >= 0 && r != c) rows.emplace_back(b, static_cast<int>(r), it.value());
+    }
+  block_rows_.resize(static_cast<Eigen::Index>(plan.dofs.size()), K_.cols());
+  block_rows_.setFromTriplets(rows.begin(), rows.end());
+  anchor_activity_ = factor_activity_ = activity_;
+  anchor_held_ = factor_held_ = held_dofs();
 }
 
 void ElasticProblem::refactorize_changed() {
@@ -228,32 +278,47 @@ void ElasticProblem::refactorize_changed() {
     assemble_and_factorize();
     return;
   }
-  // S = the anchor's + sum over changed elements of (a - a_anchor) K_e on the block; then the held
-  // dofs' rows and columns as the full assembly holds them (orphans appear as material goes).
-  Eigen::MatrixXd S = block_->anchor_schur();
-  for (const auto& [e, delta] : changes_since_anchor()) {
-    if (!changing_[static_cast<std::size_t>(e)])
+  // S changes by sum over the elements changed since the last factorization of (a - a_then) K_e,
+  // on their dofs, and on the rows and columns of dofs newly held (orphans appear as material
+  // goes), which the full assembly holds as it does: all from the first block dof they touch on.
+  const auto changes = changes_since(factor_activity_);
+  const auto held = held_dofs();
+  const auto m = block_->block_size();
+  Eigen::Index first = m;
+  for (const auto& [e, delta] : changes) {
+    if (last_change_[static_cast<std::size_t>(e)] == 0)
       throw std::logic_error("refactorize_changed: element " + std::to_string(e) + " changed outside the anchor's block");
-    const auto nodes = mesh_.element(e);
-    const Eigen::MatrixXd& Ke = operators_.stiffness(e);
-    for (std::size_t a = 0; a < 3 * nodes.size(); ++a) {
-      const int i = block_index_[static_cast<std::size_t>(3 * nodes[a / 3] + static_cast<int>(a % 3))];
-      for (std::size_t b = 0; b < 3 * nodes.size(); ++b) {
-        const int j = block_index_[static_cast<std::size_t>(3 * nodes[b / 3] + static_cast<int>(b % 3))];
-        S(i, j) += delta * Ke(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
+    for (int n : mesh_.element(e)) first = std::min<Eigen::Index>(first, block_index_[static_cast<std::size_t>(3 * n)]);
+  }
+  for (int d : block_->block())
+    if (held[static_cast<std::size_t>(d)] != factor_held_[static_cast<std::size_t>(d)]) first = std::min<Eigen::Index>(first, block_index_[static_cast<std::size_t>(d)]);
+  if (first == m) {
+    ++block_stats_.unchanged_stations;
+    return;
+  }
+  // A node's three dofs are consecutive in the block, x first.
+  auto change = [&](Eigen::Ref<Eigen::MatrixXd> T) {
+    for (const auto& [e, delta] : changes) {
+      const auto nodes = mesh_.element(e);
+      const Eigen::MatrixXd& Ke = operators_.stiffness(e);
+      for (std::size_t a = 0; a < 3 * nodes.size(); ++a) {
+        const Eigen::Index i = block_index_[static_cast<std::size_t>(3 * nodes[a / 3] + static_cast<int>(a % 3))] - first;
+        for (std::size_t b = 0; b < 3 * nodes.size(); ++b) {
+          const Eigen::Index j = block_index_[static_cast<std::size_t>(3 * nodes[b / 3] + static_cast<int>(b % 3))] - first;
+          T(i, j) += delta * Ke(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
+        }
       }
     }
-  }
-  const auto held = held_dofs();
-  for (int d : block_->block()) {
-    if (!held[static_cast<std::size_t>(d)]) continue;
-    const int i = block_index_[static_cast<std::size_t>(d)];
-    S.row(i).setZero();
-    S.col(i).setZero();
-    S(i, i) = anchor_scale_;
-  }
+    for (Eigen::Index i = 0; i < T.rows(); ++i) {
+      if (!held[static_cast<std::size_t>(block_->block()[static_cast<std::size_t>(first + i)])]) continue;
+      T.row(i).setZero();
+      T.col(i).setZero();
+      T(i, i) = anchor_scale_;
+    }
+  };
+  const long long trailing_before = block_->trailing_dofs();
   const double seconds_before = block_->refactorize_seconds();
-  const bool positive = block_->refactorize(S);
+  const bool positive = block_->refactorize_trailing(first, change);
   block_stats_.refactorize_seconds += block_->refactorize_seconds() - seconds_before;
   if (!positive) {
     // Round-off cannot make S indefinite where the full matrix is not: leave it to the full
@@ -261,7 +326,10 @@ void ElasticProblem::refactorize_changed() {
     assemble_and_factorize();
     return;
   }
+  factor_activity_ = activity_;
+  factor_held_ = held;
   ++block_stats_.block_refactorizations;
+  block_stats_.trailing_dofs += block_->trailing_dofs() - trailing_before;
 }
 
 const Eigen::MatrixXd& ElasticProblem::element_load(int e) {
@@ -291,12 +359,18 @@ Eigen::MatrixXd ElasticProblem::solve() {
   for (int d : fixed_dofs_) F.row(d).setZero();
   Eigen::MatrixXd U = solve_by_group(F);
   if (!block_current_) {
-    if (measure_full_residual_) block_stats_.worst_full_residual = std::max(block_stats_.worst_full_residual, column_residuals(F, U).maxCoeff());
+    if (measure_full_residual_) {
+      const auto t0 = std::chrono::steady_clock::now();
+      block_stats_.worst_full_residual = std::max(block_stats_.worst_full_residual, column_residuals(F, U).maxCoeff());
+      block_stats_.residual_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
     return U;
   }
   // Each group on its own, so that a group's columns stay what a problem holding it alone gives.
   const auto t0 = std::chrono::steady_clock::now();
-  const Eigen::VectorXd residuals = column_residuals(F, U);
+  const bool whole = block_solves_++ % kWholeResidualEvery == 0;
+  const Eigen::VectorXd residuals = whole ? column_residuals(F, U) : block_row_residuals(F, U);
+  block_stats_.whole_residuals += whole;
   block_stats_.residual_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   bool factorized = false;
   for_each_group([&](Eigen::Index first, Eigen::Index n) {
@@ -307,13 +381,43 @@ Eigen::MatrixXd ElasticProblem::solve() {
     }
     ++block_stats_.residual_fallbacks;
     if (!factorized) {
-      // The full path's matrix, bit for bit; K_ stays the anchor's for the chunk's next stations.
+      // The full path's matrix, bit for bit; K_ stays the anchor's for the chunk's next stations,
+      // and S starts again from the anchor's, in case its updates gathered the error.
       solver_.factorize(held_stiffness());
       factorized = true;
+      block_->reset_to_anchor();
+      factor_activity_ = anchor_activity_;
+      factor_held_ = anchor_held_;
     }
     U.middleCols(first, n) = solver_.solve(F.middleCols(first, n));
   });
   return U;
+}
+
+Eigen::VectorXd ElasticProblem::block_row_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U) {
+  const auto& block = block_->block();
+  Eigen::MatrixXd R(static_cast<Eigen::Index>(block.size()), F.cols());
+  for (std::size_t b = 0; b < block.size(); ++b) R.row(static_cast<Eigen::Index>(b)) = F.row(block[b]);
+  R.noalias() -= block_rows_ * U;
+  for (const auto& [e, delta] : changes_since(anchor_activity_)) {
+    const auto nodes = mesh_.element(e);
+    Eigen::MatrixXd ue(3 * static_cast<Eigen::Index>(nodes.size()), U.cols());
+    for (std::size_t a = 0; a < nodes.size(); ++a) ue.middleRows<3>(3 * static_cast<Eigen::Index>(a)) = U.middleRows<3>(3 * nodes[a]);
+    const Eigen::MatrixXd fe = delta * (operators_.stiffness(e) * ue);
+    for (std::size_t a = 0; a < nodes.size(); ++a)
+      R.middleRows<3>(block_index_[static_cast<std::size_t>(3 * nodes[a])]) -= fe.middleRows<3>(3 * static_cast<Eigen::Index>(a));
+  }
+  // Held now: held at the anchor (fixed dofs and the orphans then), or orphaned since.
+  for (std::size_t b = 0; b < block.size(); ++b) {
+    const auto d = static_cast<std::size_t>(block[b]);
+    if (orphan_[d] || anchor_held_[d]) R.row(static_cast<Eigen::Index>(b)).setZero();
+  }
+  Eigen::VectorXd residuals(F.cols());
+  for (Eigen::Index p = 0; p < F.cols(); ++p) {
+    const double f = F.col(p).norm(), r = R.col(p).norm();
+    residuals(p) = f > 0 ? r / f : (r > 0 ? std::numeric_limits<double>::infinity() : 0.0);
+  }
+  return residuals;
 }
 
 Eigen::VectorXd ElasticProblem::column_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U) {
@@ -321,7 +425,7 @@ Eigen::VectorXd ElasticProblem::column_residuals(const Eigen::MatrixXd& F, const
   // held rows are F's zeros.
   Eigen::MatrixXd R = F;
   R.noalias() -= K_.selfadjointView<Eigen::Lower>() * U;
-  for (const auto& [e, delta] : block_current_ ? changes_since_anchor() : std::vector<std::pair<int, double>>{}) {
+  for (const auto& [e, delta] : block_current_ ? changes_since(anchor_activity_) : std::vector<std::pair<int, double>>{}) {
     const auto nodes = mesh_.element(e);
     Eigen::MatrixXd ue(3 * static_cast<Eigen::Index>(nodes.size()), U.cols());
     for (std::size_t a = 0; a < nodes.size(); ++a) ue.middleRows<3>(3 * static_cast<Eigen::Index>(a)) = U.middleRows<3>(3 * nodes[a]);

@@ -30,13 +30,37 @@ namespace drom::fem {
 // What the block refactorization (assemble_and_factorize_anchor / refactorize_changed) did.
 struct BlockStats {
   int anchors = 0;               // factorizations with a block eliminated last (blocks that paid)
-  int block_refactorizations = 0;  // stations that refactorized only their block
+  int block_refactorizations = 0;  // stations that refactorized only their block (its trailing part)
+  int unchanged_stations = 0;    // later stations of a run that changed nothing since the last: nothing refactorized
   int full_chunks = 0;           // anchors whose block was too large to pay: factorized in full instead
-  int residual_fallbacks = 0;    // group solves whose residual failed the bound: solved again in full
+  int residual_fallbacks = 0;
+  int whole_residuals = 0;       // block solves checked on every row (the others: on the block's rows)    // group solves whose residual failed the bound: solved again in full
   long long block_dofs = 0;      // summed over anchors
-  double anchor_seconds = 0, refactorize_seconds = 0, solve_seconds = 0, residual_seconds = 0;
+  long long trailing_dofs = 0;   // refactorized, summed over block refactorizations
+  double anchor_seconds = 0, refactorize_seconds = 0, solve_seconds = 0;
+  double residual_seconds = 0;   // of the residual checks, and of the full solves' when measured
   double worst_residual = 0;     // of the block solves that were kept
   double worst_full_residual = 0;  // of the full solves, when measured (measure_full_residuals)
+};
+
+// What a run of stations changes after its first (station 0 of the run): per element, the first and
+// the last station of the run that change it, 0 if none does.
+struct RunChanges {
+  std::vector<int> first, last;
+};
+
+// The block of a run of stations (ElasticProblem::assemble_and_factorize_anchor) and what its
+// refactorizations are expected to cost.
+struct BlockPlan {
+  // The dofs of the elements the run's later stations change, in elimination order: by the last
+  // station that changes them; among equals, those first changed later come first; then by dof. At
+  // station j a dof last changed before j stays in the leading part of S's factor: only the trailing
+  // part, from the first dof changed at j, is refactorized.
+  std::vector<int> dofs;
+  int stations = 1;  // the run's stations up to its last change (the anchor is station 0)
+  // Dense flops of stations 1 .. stations - 1: t^3 / 3 to refactorize the t trailing dofs (those
+  // changed at the station or later: an upper bound), plus forming their T (TrailingBlockCholesky).
+  double refactorization_flops = 0;
 };
 
 class ElasticProblem {
@@ -50,7 +74,8 @@ class ElasticProblem {
   // Step 1: equilibrate each profile on the intact free stock (held 3-2-1 at `isostatic_dofs`).
   void equilibrate(const std::vector<int>& isostatic_dofs);
   // Or take the equilibrium another problem on the same mesh, part and profiles computed (so parallel
-  // workers share one equilibration), and its profile groups.
+  // workers share one equilibration), and its profile groups; and its fill-reducing ordering, if it
+  // has one (full_factorization_flops).
   void adopt_equilibrium(const ElasticProblem& other);
   // The equilibrium (u0, r0, its residual, the profile groups) as bytes, and adopted from them: what
   // rank 0 of an MPI job hands the other ranks (offline/job_team.hpp), bit for bit. The bytes must
@@ -67,26 +92,31 @@ class ElasticProblem {
   void set_fixed_dofs(std::vector<int> dofs);
   // Step 3.
   void assemble_and_factorize();
-  // Step 3 for the first of a run of stations whose later changes stay inside `changing_elements`
-  // (one flag per element): factorizes this state with those elements' dofs eliminated last
+  // Step 3 for the first of a run of stations whose later changes stay inside the elements `changes`
+  // names: factorizes this state with those elements' dofs eliminated last, in plan_block's order
   // (fem/trailing_block_cholesky.hpp), so that each later station of the run only refactorizes that
-  // block (refactorize_changed). When the block's dense refactorization would cost more than a
-  // quarter of a full one (or hold more than 4 000 dofs), factorizes in full instead, and the run's
-  // stations do too.
-  void assemble_and_factorize_anchor(const std::vector<char>& changing_elements);
-  // Whether a block of this many dofs pays against a full factorization of `full_flops`: the rule
-  // assemble_and_factorize_anchor applies (its dense refactorization, m^3 / 3 flops, within a
-  // quarter of a full one, and m <= 4 000).
-  static bool block_pays(double block_dofs, double full_flops);
+  // block's trailing part (refactorize_changed). When the block does not pay (block_pays), factorizes
+  // in full instead, and the run's stations do too.
+  void assemble_and_factorize_anchor(const RunChanges& changes);
+  static BlockPlan plan_block(const Mesh& mesh, const RunChanges& changes);
+  // Whether a run's block pays against a full factorization of `full_flops` at each of its stations:
+  // its anchor (F + m^3 / 3) and refactorizations cost fewer flops, and m <= 4 000 (the dense
+  // matrices a worker keeps: 128 MB each).
+  static bool block_pays(const BlockPlan& plan, double full_flops);
   // The flops of a full factorization of this problem's stiffness pattern in the fill-reducing order
   // the anchors use (one symbolic analysis, kept).
   double full_factorization_flops();
   // Step 3 for a later station of that run. The activity may differ from the anchor's only on the
-  // changing elements (std::logic_error otherwise). Without an anchor: assemble_and_factorize().
+  // changing elements (std::logic_error otherwise). Refactorizes S from the first block dof the
+  // changes since the last factorization touch. Without an anchor: assemble_and_factorize().
   void refactorize_changed();
   // A block solve whose relative residual max_p ||K u_p - f_p|| / ||f_p|| over a profile group
   // exceeds this is thrown away: the station is factorized in full and that group solved again
-  // (the run's next stations still try the block).
+  // (the run's next stations still try the block, with S rebuilt from the anchor's). Every block
+  // solve is checked on the block's rows, where S's updates act; every kWholeResidualEvery-th of a
+  // run, from its anchor, on every row. The rest's rows (R) solve K_RR x_R + K_RB x_B = f_R
+  // through the anchor's own factor whatever S is: their residual is that factor's round-off.
+  static constexpr int kWholeResidualEvery = 4;
   void set_residual_bound(double bound) { residual_bound_ = bound; }
   const BlockStats& block_stats() const { return block_stats_; }
   // Also measure the residual of full solves (one more sparse product each), for comparison.
@@ -137,11 +167,13 @@ class ElasticProblem {
   // The stiffness at the current activity, held (orphan_ updated); `scale`, if given, gets the held
   // dofs' diagonal.
   Eigen::SparseMatrix<double> held_stiffness(double* scale = nullptr);
-  // (element, a - a_anchor) for every element whose fraction differs from the anchor's.
-  std::vector<std::pair<int, double>> changes_since_anchor() const;
+  // (element, a - a_then) for every element whose fraction differs from `then`'s.
+  std::vector<std::pair<int, double>> changes_since(const std::vector<double>& then) const;
   std::vector<char> held_dofs();  // orphans (from the activity) and fixed dofs; updates orphan_
   // ||K u_p - f_p|| / ||f_p|| per column, for the current K.
   Eigen::VectorXd column_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U);
+  // The same on the block's rows only (relative to the whole ||f_p||).
+  Eigen::VectorXd block_row_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U);
   Eigen::VectorXd gather(int e, const Eigen::VectorXd& u) const;
 
   const Mesh& mesh_;
@@ -155,9 +187,13 @@ class ElasticProblem {
   std::unique_ptr<TrailingBlockCholesky> block_;
   bool block_current_ = false;  // the last factorization is the block one
   std::vector<int> base_ordering_;  // fill-reducing order of the pattern, computed once
-  std::vector<char> changing_;      // per element, of the current run
+  std::vector<int> last_change_;    // per element, of the current run (RunChanges::last)
+  std::vector<double> factor_activity_;  // the activity the current S (its factor) stands for
+  std::vector<char> factor_held_, anchor_held_;  // per dof: held at factor_activity_, at the anchor
   std::vector<int> block_index_;    // per dof: its index in the block, or -1
   std::vector<double> anchor_activity_;
+  Eigen::SparseMatrix<double, Eigen::RowMajor> block_rows_;  // the anchor's K on the block's rows (m x n)
+  int block_solves_ = 0;                                     // since the anchor
   double anchor_scale_ = 1;
   double residual_bound_ = 1e-8;
   double full_flops_ = 0;  // of a full factorization in base_ordering_

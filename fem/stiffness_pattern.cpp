@@ -45,15 +45,19 @@ void StiffnessPattern::add_element(Eigen::SparseMatrix<double>& K, std::span<con
   const int* inner = K.innerIndexPtr();
   double* values = K.valuePtr();
   const auto n = static_cast<int>(nodes.size());
+  // A column holds whole 3 x 3 node blocks (clipped at the diagonal): one search per node pair,
+  // the node's three rows follow one another.
   for (int q = 0; q < 3 * n; ++q) {
     const int col = 3 * nodes[static_cast<std::size_t>(q / 3)] + q % 3;
     const int* begin = inner + outer[col];
     const int* end = inner + outer[col + 1];
-    for (int p = 0; p < 3 * n; ++p) {
-      const int row = 3 * nodes[static_cast<std::size_t>(p / 3)] + p % 3;
-      if (row < col) continue;
-      const int* it = std::lower_bound(begin, end, row);
-      values[it - inner] += scale * Ke(p, q);
+    for (int a = 0; a < n; ++a) {
+      const int first_row = 3 * nodes[static_cast<std::size_t>(a)];
+      if (first_row + 2 < col) continue;
+      const int c0 = std::max(0, col - first_row);
+      const int* it = std::lower_bound(begin, end, first_row + c0);
+      double* v = values + (it - inner);
+      for (int c = c0; c < 3; ++c) v[c - c0] += scale * Ke(3 * a + c, q);
     }
   }
 }

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <string>
@@ -17,6 +18,11 @@ extern "C" {
 void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* info, std::size_t uplo_length);
 void dpotrs_(const char* uplo, const int* n, const int* nrhs, const double* a, const int* lda, double* b, const int* ldb, int* info,
              std::size_t uplo_length);
+void dtrmm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m, const int* n, const double* alpha, const double* a,
+            const int* lda, double* b, const int* ldb, std::size_t side_length, std::size_t uplo_length, std::size_t transa_length, std::size_t diag_length);
+void dtrsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m, const int* n, const double* alpha, const double* a,
+            const int* lda, double* b, const int* ldb, std::size_t side_length, std::size_t uplo_length, std::size_t transa_length, std::size_t diag_length);
+void dlauum_(const char* uplo, const int* n, double* a, const int* lda, int* info, std::size_t uplo_length);
 void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha, const double* a, const int* lda, const double* beta,
             double* c, const int* ldc, std::size_t uplo_length, std::size_t trans_length);
 }
@@ -49,11 +55,45 @@ void cholesky_solve(const Eigen::MatrixXd& factor, Eigen::MatrixXd& b) {
   if (info != 0) throw std::logic_error("dpotrs: bad argument " + std::to_string(-info));
 }
 
-// The lower triangle of C := L L^T (C is n x n, L n x n).
-void lower_times_transpose(const Eigen::MatrixXd& lower, Eigen::MatrixXd& c) {
-  const int n = size_of(lower.rows());
-  const double one = 1, zero = 0;
-  if (n > 0) dsyrk_("L", "N", &n, &n, &one, lower.data(), &n, &zero, c.data(), &n, 1, 1);
+// B := op(L) B or op(L)^-1 B, L lower triangular (n x n), B n x k inside an array of leading
+// dimension ldb; op is the transpose if `transpose`.
+void triangular_multiply(const Eigen::MatrixXd& lower, bool transpose, Eigen::Index k, double* b, Eigen::Index ldb) {
+  const int n = size_of(lower.rows()), kk = size_of(k), lb = size_of(ldb);
+  const double one = 1;
+  if (n > 0 && kk > 0) dtrmm_("L", "L", transpose ? "T" : "N", "N", &n, &kk, &one, lower.data(), &n, b, &lb, 1, 1, 1, 1);
+}
+void triangular_solve(const Eigen::MatrixXd& lower, Eigen::Index k, double* b, Eigen::Index ldb) {
+  const int n = size_of(lower.rows()), kk = size_of(k), lb = size_of(ldb);
+  const double one = 1;
+  if (n > 0 && kk > 0) dtrsm_("L", "L", "N", "N", &n, &kk, &one, lower.data(), &n, b, &lb, 1, 1, 1, 1);
+}
+
+// The lower triangle of C += sign A A^T (C n x n, A n x k; both inside column-major arrays of
+// leading dimensions ldc and lda).
+void add_product(double sign, Eigen::Index n, Eigen::Index k, const double* a, Eigen::Index lda, double* c, Eigen::Index ldc) {
+  const int nn = size_of(n), kk = size_of(k), la = size_of(lda), lc = size_of(ldc);
+  const double one = 1;
+  if (nn > 0 && kk > 0) dsyrk_("L", "N", &nn, &kk, &sign, a, &la, &one, c, &lc, 1, 1);
+}
+
+// B := B L^T, L lower triangular (k x k, inside an array of leading dimension ldl), B n x k.
+void multiply_by_transpose(Eigen::Index k, const double* lower, Eigen::Index ldl, Eigen::MatrixXd& b) {
+  const int n = size_of(b.rows()), kk = size_of(k), ll = size_of(ldl);
+  const double one = 1;
+  if (n > 0 && kk > 0) dtrmm_("R", "L", "T", "N", &n, &kk, &one, lower, &ll, b.data(), &n, 1, 1, 1, 1);
+}
+
+// The lower triangle of L L^T for a lower triangular L (n x n): n^3 / 3 flops, where dsyrk, which
+// takes L as full, spends n^3. LAPACK's dlauum forms U U^T for an upper triangular U: U is L with
+// its rows and columns reversed, and so is the product.
+Eigen::MatrixXd lower_times_transpose(const Eigen::Ref<const Eigen::MatrixXd>& lower) {
+  const Eigen::Index n = lower.rows();
+  Eigen::MatrixXd reversed = lower.reverse();
+  const int nn = size_of(n);
+  int info = 0;
+  if (nn > 0) dlauum_("U", &nn, reversed.data(), &nn, &info, 1);
+  if (info != 0) throw std::logic_error("dlauum: bad argument " + std::to_string(-info));
+  return reversed.reverse();
 }
 
 }  // namespace
@@ -119,6 +159,7 @@ bool TrailingBlockCholesky::factorize_anchor(const Eigen::SparseMatrix<double>& 
     if (!in_block[static_cast<std::size_t>(d)]) order_.push_back(d);
   order_.insert(order_.end(), block_.begin(), block_.end());
 
+  // Permuted here: CHOLMOD permuting from a given order made an anchor 10 % slower.
   Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> position(n);
   for (Eigen::Index k = 0; k < n; ++k) position.indices()[order_[static_cast<std::size_t>(k)]] = static_cast<int>(k);
   Eigen::SparseMatrix<double> permuted(n, n);
@@ -160,24 +201,66 @@ bool TrailingBlockCholesky::factorize_anchor(const Eigen::SparseMatrix<double>& 
       for (int r = col - c0; r < height; ++r)
         lower_bb_(rows[pi[s] + r] - first, col - first) = x[px[s] + static_cast<std::ptrdiff_t>(col - c0) * height + r];
   }
-  schur_anchor_ = Eigen::MatrixXd::Zero(m, m);
-  lapack::lower_times_transpose(lower_bb_, schur_anchor_);
-  schur_anchor_ = schur_anchor_.selfadjointView<Eigen::Lower>();
-  schur_is_anchor_ = true;
+  reset_to_anchor();
   anchor_seconds_ += seconds_since(t0);
   return true;
 }
 
-bool TrailingBlockCholesky::refactorize(const Eigen::MatrixXd& schur) {
-  if (schur.rows() != block_size() || schur.cols() != block_size()) throw std::invalid_argument("TrailingBlockCholesky: S must be m x m");
+void TrailingBlockCholesky::reset_to_anchor() {
+  schur_is_anchor_ = true;
+  schur_factor_.resize(0, 0);
+  trailing_.resize(0, 0);
+  trailing_start_ = 0;
+}
+
+bool TrailingBlockCholesky::refactorize_trailing(Eigen::Index first, const std::function<void(Eigen::Ref<Eigen::MatrixXd>)>& change) {
+  const Eigen::Index m = block_size();
+  if (!cholmod_->factor) throw std::logic_error("TrailingBlockCholesky::refactorize_trailing before factorize_anchor");
+  if (first < 0 || first > m) throw std::invalid_argument("TrailingBlockCholesky: the changed part must start inside the block");
   const auto t0 = std::chrono::steady_clock::now();
-  Eigen::MatrixXd next = schur;
-  const bool positive = lapack::cholesky_lower(next);
+  const Eigen::Index t = m - first;
+  const Eigen::MatrixXd& factor = schur_is_anchor_ ? lower_bb_ : schur_factor_;
+  // T = S_22 - L_21 L_21^T = L_22 L_22^T, formed from the last T (T_q, from block index q; none at
+  // the anchor: q = m), so that the cost follows how far `first` moved since, not t.
+  const Eigen::Index q = schur_is_anchor_ ? m : trailing_start_;
+  Eigen::MatrixXd T(t, t);
+  if (first >= q) {
+    // Moved on by k: T_q minus the k columns that left (t^2 k), or L_22 L_22^T if that is less (t^3 / 3).
+    const Eigen::Index k = first - q;
+    if (3 * k <= t) {
+      T = trailing_.bottomRightCorner(t, t);
+      lapack::add_product(-1, t, k, factor.data() + first + q * m, m, T.data(), t);
+    } else {
+      T = lapack::lower_times_transpose(factor.bottomRightCorner(t, t));
+    }
+  } else {
+    // Moved back by k: with L's rows from `first` on split at q into [A 0; B C] (C C^T = T_q),
+    // T = [A A^T, .; B A^T, B B^T + T_q]: L_22 L_22^T less the (t - k)^3 / 3 of C C^T.
+    const Eigen::Index k = q - first, rest = m - q;
+    const double* a = factor.data() + first + first * m;
+    const double* b = factor.data() + q + first * m;
+    T.topLeftCorner(k, k) = lapack::lower_times_transpose(factor.block(first, first, k, k));
+    if (rest > 0) {
+      T.bottomRightCorner(rest, rest) = trailing_;
+      lapack::add_product(+1, rest, k, b, m, T.data() + k + k * t, t);
+      Eigen::MatrixXd ba = factor.block(q, first, rest, k);
+      lapack::multiply_by_transpose(k, a, m, ba);
+      T.bottomLeftCorner(rest, k) = ba;
+    }
+  }
+  change(T);
+  Eigen::MatrixXd refactorized = T;
+  const bool positive = lapack::cholesky_lower(refactorized);
+  if (positive) {
+    if (schur_is_anchor_) schur_factor_ = lower_bb_;
+    schur_factor_.bottomRightCorner(t, t) = refactorized;
+    trailing_ = std::move(T);
+    trailing_start_ = first;
+    schur_is_anchor_ = false;
+    trailing_dofs_ += t;
+  }
   refactorize_seconds_ += seconds_since(t0);
-  if (!positive) return false;
-  schur_factor_ = std::move(next);
-  schur_is_anchor_ = false;
-  return true;
+  return positive;
 }
 
 Eigen::MatrixXd TrailingBlockCholesky::solve(const Eigen::MatrixXd& rhs) {
@@ -201,22 +284,26 @@ Eigen::MatrixXd TrailingBlockCholesky::solve(const Eigen::MatrixXd& rhs) {
     const DenseResult forward(cholmod_solve(CHOLMOD_L, c.factor, &forward_in, &c.common), &c.common);
     if (!forward.dense) throw std::runtime_error("CHOLMOD: the forward solve failed");
     if (kept_.size() == 4) kept_.erase(kept_.begin());  // one per profile group, in practice
-    kept_.push_back({std::move(f_r), forward.matrix()});
+    Eigen::MatrixXd coupling = forward.matrix().bottomRows(m);
+    lapack::triangular_multiply(lower_bb_, false, coupling.cols(), coupling.data(), m);
+    kept_.push_back({std::move(f_r), forward.matrix(), std::move(coupling)});
     kept = std::prev(kept_.end());
     ++forward_solves_;
   }
   Eigen::MatrixXd y = kept->forward;
   Eigen::MatrixXd f_b(m, rhs.cols());
   for (Eigen::Index k = 0; k < m; ++k) f_b.row(k) = rhs.row(block_[static_cast<std::size_t>(k)]);
-  f_b += lower_bb_.triangularView<Eigen::Lower>() * y.bottomRows(m);
+  f_b += kept->coupling;
   Eigen::MatrixXd x_b;
   if (schur_is_anchor_) {
     // S is the anchor's, L_BB L_BB^T: the backward solve below finishes x_B itself.
-    y.bottomRows(m) = lower_bb_.triangularView<Eigen::Lower>().solve(f_b);
+    lapack::triangular_solve(lower_bb_, f_b.cols(), f_b.data(), m);
+    y.bottomRows(m) = f_b;
   } else {
     x_b = f_b;
     lapack::cholesky_solve(schur_factor_, x_b);
-    y.bottomRows(m) = lower_bb_.triangularView<Eigen::Lower>().transpose() * x_b;
+    y.bottomRows(m) = x_b;
+    lapack::triangular_multiply(lower_bb_, true, y.cols(), y.data() + first, n);
   }
   cholmod_dense backward_in = Eigen::viewAsCholmod(y);
   const DenseResult backward(cholmod_solve(CHOLMOD_Lt, c.factor, &backward_in, &c.common), &c.common);

@@ -27,12 +27,21 @@ void ActivityHistory::advance(std::size_t k, std::vector<double>& fractions) con
   for (auto i = offsets_[k]; i < offsets_[k + 1]; ++i) fractions[static_cast<std::size_t>(changed_[i])] = value_[i];
 }
 
-std::vector<char> ActivityHistory::changing(std::size_t first, std::size_t last) const {
-  if (first > last || last > stations()) throw std::out_of_range("ActivityHistory: stations " + std::to_string(first) + " to " + std::to_string(last));
-  std::vector<char> flags(elements_, 0);
+fem::RunChanges ActivityHistory::run_changes(std::size_t first, std::size_t last, double floor) const {
+  if (first >= last || last > stations()) throw std::out_of_range("ActivityHistory: stations " + std::to_string(first) + " to " + std::to_string(last));
+  std::vector<double> fractions = at(first);
+  fem::RunChanges changes{std::vector<int>(elements_, 0), std::vector<int>(elements_, 0)};
   for (std::size_t k = first + 1; k < last; ++k)
-    for (auto i = offsets_[k]; i < offsets_[k + 1]; ++i) flags[static_cast<std::size_t>(changed_[i])] = 1;
-  return flags;
+    for (auto i = offsets_[k]; i < offsets_[k + 1]; ++i) {
+      const auto e = static_cast<std::size_t>(changed_[i]);
+      const double before = fractions[e];
+      fractions[e] = value_[i];
+      if (before < floor && value_[i] < floor) continue;
+      const int station = static_cast<int>(k - first);
+      if (changes.first[e] == 0) changes.first[e] = station;
+      changes.last[e] = station;
+    }
+  return changes;
 }
 
 std::vector<double> ActivityHistory::at(std::size_t k) const {

@@ -3,6 +3,8 @@
 // removal is swept once (rank 0), and every worker and rank replays it. A station changes the few
 // elements its cut touched, so the history is a small fraction of one full vector per station
 // (docs/distributed.md gives the sizes), and it travels to the other ranks in one message.
+#include "fem/elastic_problem.hpp"
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -22,9 +24,11 @@ class ActivityHistory {
   std::vector<double> at(std::size_t k) const;
   // Station k - 1's fractions moved on to station k's (k = 0: from the intact stock).
   void advance(std::size_t k, std::vector<double>& fractions) const;
-  // One flag per element: whether stations first + 1 .. last - 1 change it (what a run of stations
-  // first .. last - 1 changes after its first).
-  std::vector<char> changing(std::size_t first, std::size_t last) const;
+  // What a run of stations first .. last - 1 changes after its first: per element, the first and the
+  // last of stations first + 1 .. last - 1 that change it, counted from `first`, or 0 if none does.
+  // A change between two fractions below `floor` is none (the FE counts both as removed:
+  // fem::ElasticProblem::kMinVolumeFraction).
+  fem::RunChanges run_changes(std::size_t first, std::size_t last, double floor) const;
   // Element changes stored over all stations.
   std::size_t changes() const { return changed_.size(); }
 

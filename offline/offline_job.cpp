@@ -575,7 +575,7 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
         activity = history.at(task.first);
         // The whole chunk's changes, also where a slice or a resume solves only part of it: the same
         // block, so the same round-off.
-        if (solvers->chunk() > 1) solver->start_chunk(history.changing(task.first, std::min(ns, task.first + solvers->chunk())));
+        if (solvers->chunk() > 1) solver->start_chunk(history.run_changes(task.first, std::min(ns, task.first + solvers->chunk()), fem::ElasticProblem::kMinVolumeFraction));
         for (std::size_t k = task.first; k < task.last; ++k) {
           if (k > task.first) history.advance(k, activity);
           const bool saved = !range.contains(k) || saved_by_all(station_name(k));

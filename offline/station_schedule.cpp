@@ -124,24 +124,19 @@ ChunkChoice choose_stations_per_factorization(const ActivityHistory& history, co
   const std::size_t ns = history.stations();
   ChunkChoice choice;
   double best = 0;
-  std::vector<int> mark(static_cast<std::size_t>(mesh.node_count()), -1);
-  int stamp = 0;
   for (std::size_t C = 1; C <= 64; C *= 2) {
     double total = 0;
     for (std::size_t first = 0; first < ns; first += C) {
       const std::size_t last = std::min(ns, first + C);
       const double len = static_cast<double>(last - first);
-      double m = 0;
-      if (C > 1) {
-        const auto changing = history.changing(first, last);
-        ++stamp;
-        for (int e = 0; e < mesh.element_count(); ++e)
-          if (changing[static_cast<std::size_t>(e)])
-            for (int n : mesh.element(e))
-              if (mark[static_cast<std::size_t>(n)] != stamp) mark[static_cast<std::size_t>(n)] = stamp, m += 3;
+      if (C == 1) {
+        total += len * (1 + kOverhead) * full_flops;
+        continue;
       }
-      if (C > 1 && fem::ElasticProblem::block_pays(m, full_flops))
-        total += full_flops + len * (m * m * m / 3 + kOverhead * full_flops);
+      const auto plan = fem::ElasticProblem::plan_block(mesh, history.run_changes(first, last, fem::ElasticProblem::kMinVolumeFraction));
+      const double m = static_cast<double>(plan.dofs.size());
+      if (fem::ElasticProblem::block_pays(plan, full_flops))
+        total += full_flops + m * m * m / 3 + plan.refactorization_flops + len * kOverhead * full_flops;
       else
         total += len * (1 + kOverhead) * full_flops;
     }

@@ -53,11 +53,11 @@ std::vector<ChunkTask> chunk_tasks(std::size_t stations, std::size_t chunk, cons
 // its removal history: of the candidates 1, 2, 4, ..., 64, the one with the least estimated cost of
 // all the stations. Per chunk of C stations with m dofs in its changing elements, in flops (F: a
 // full factorization's, fem::ElasticProblem::full_factorization_flops):
-//   the block pays (fem::ElasticProblem::block_pays): F + m^3/3 + kOverhead F for its first station,
-//                                                     m^3/3 + kOverhead F for each other one;
-//   it does not:                                      (1 + kOverhead) F for every station.
+//   the block pays (fem::ElasticProblem::block_pays): F + m^3/3 for its first station, the dense
+//     refactorizations of the others (fem::BlockPlan::refactorization_flops), kOverhead F each;
+//   it does not: (1 + kOverhead) F for every station.
 // kOverhead (0.1) stands for what a station costs besides factorizing: assembly, the solves and the
-// residual check (measured 0.07 to 0.12 of a full factorization's time, docs/benchmarks.md). Larger C
+// residual check (measured 0.06 to 0.2 of a full factorization's time, docs/benchmarks.md). Larger C
 // spreads the first station's F over more stations but grows m; past the rule's limit a chunk pays
 // nothing. Ties go to the smaller C. The estimates are kept, for summary.json.
 struct ChunkChoice {

@@ -39,15 +39,15 @@ class FeStation final : public StationSolver {
     clamped_.set_residual_bound(residual_bound);
   }
 
-  void start_chunk(const std::vector<char>& changing_elements) override {
-    changing_ = changing_elements;
+  void start_chunk(const fem::RunChanges& changes) override {
+    changes_ = changes;
     anchor_next_ = true;
   }
 
   Eigen::MatrixXd solve(const std::vector<double>& activity, bool follows_previous) override {
     clamped_.set_activity(activity);
     if (anchor_next_)
-      clamped_.assemble_and_factorize_anchor(changing_);
+      clamped_.assemble_and_factorize_anchor(changes_);
     else if (follows_previous)
       clamped_.refactorize_changed();
     else
@@ -86,6 +86,8 @@ class FeStation final : public StationSolver {
                      {"block", {{"anchors", b.anchors},
                                 {"block_dofs", b.block_dofs},
                                 {"block_refactorizations", b.block_refactorizations},
+                                {"trailing_dofs", b.trailing_dofs},
+                                {"unchanged_stations", b.unchanged_stations},
                                 {"full_chunks", b.full_chunks},
                                 {"residual_fallbacks", b.residual_fallbacks},
                                 {"anchor_s", b.anchor_seconds},
@@ -102,7 +104,7 @@ class FeStation final : public StationSolver {
   const std::vector<fem::StressProfile>& profiles_;
   const fem::ElasticProblem& base_;
   fem::ElasticProblem clamped_;
-  std::vector<char> changing_;
+  fem::RunChanges changes_;
   bool anchor_next_ = false;
   std::unique_ptr<fem::ElasticProblem> free_;
   const fem::ElasticProblem* last_ = nullptr;

@@ -27,10 +27,10 @@ class StationSolver {
   // the clamped part with these remaining fractions. `follows_previous`: the last call solved the
   // previous station, so its solution may seed this one.
   virtual Eigen::MatrixXd solve(const std::vector<double>& activity, bool follows_previous) = 0;
-  // Before the first station of a chunk: the elements the chunk's later stations change (one flag per
-  // element). The FE factorizes the first station with their dofs last, and the later ones refactorize
-  // only those (fem/trailing_block_cholesky.hpp).
-  virtual void start_chunk(const std::vector<char>& changing_elements) { (void)changing_elements; }
+  // Before the first station of a chunk: what the chunk's later stations change, and when
+  // (ActivityHistory::run_changes). The FE factorizes the first station with their dofs last, and
+  // the later ones refactorize only those (fem/trailing_block_cholesky.hpp).
+  virtual void start_chunk(const fem::RunChanges& changes) { (void)changes; }
   // The unclamped part's shape with these remaining fractions, after best-fit rigid alignment; dofs of
   // nodes that no material holds are 0.
   virtual Eigen::MatrixXd free_shape(const std::vector<double>& activity) = 0;

@@ -10,6 +10,8 @@
 #include <Eigen/SparseCholesky>
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -79,10 +81,14 @@ TEST(TrailingBlockCholesky, RefactorizingTheBlockSolvesTheChangedMatrix) {
   std::uniform_real_distribution<double> u(-1, 1);
   Eigen::MatrixXd rhs(g.size(), 3);
   for (Eigen::Index i = 0; i < rhs.size(); ++i) rhs.data()[i] = u(rng);
-  // The anchor itself, then the block's stiffness lowered step by step, as material goes.
+  // The anchor itself, then the block's stiffness lowered step by step, as material goes: each
+  // change is measured from the last matrix.
+  Eigen::SparseMatrix<double> previous = anchor;
   for (double softness : {1.0, 0.6, 0.2, 1e-3}) {
     const Eigen::SparseMatrix<double> changed = laplacian(g, in_block, softness);
-    ASSERT_TRUE(solver.refactorize(solver.anchor_schur() + block_of(changed, block) - block_of(anchor, block)));
+    const Eigen::MatrixXd change = block_of(changed, block) - block_of(previous, block);
+    ASSERT_TRUE(solver.refactorize_trailing(0, [&](Eigen::Ref<Eigen::MatrixXd> T) { T += change; }));
+    previous = changed;
     const Eigen::MatrixXd x = solver.solve(rhs);
     const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> reference(changed);
     EXPECT_LT(relative_difference(x, reference.solve(rhs)), 1e-11) << softness;
@@ -97,6 +103,48 @@ TEST(TrailingBlockCholesky, RefactorizingTheBlockSolvesTheChangedMatrix) {
   EXPECT_LT(relative_difference(x, reference.solve(rhs)), 1e-11);
 }
 
+TEST(TrailingBlockCholesky, RefactorizingOnlyTheTrailingPartSolvesTheChangedMatrix) {
+  // Changes confined to the block's indices from some `first` on, which moves on and back: each
+  // station refactorizes only from there, forming its T from the last one's.
+  const Grid g{10, 8, 5};
+  std::vector<char> in_block(static_cast<std::size_t>(g.size()), 0);
+  std::vector<int> block;
+  for (int k = 2; k < 5; ++k)
+    for (int j = 1; j < 7; ++j)
+      for (int i = 2; i < 8; ++i) in_block[static_cast<std::size_t>(g.index(i, j, k))] = 1, block.push_back(g.index(i, j, k));
+  const auto m = static_cast<Eigen::Index>(block.size());
+  const Eigen::SparseMatrix<double> anchor = laplacian(g, in_block, 1.0);
+  fem::TrailingBlockCholesky solver;
+  ASSERT_TRUE(solver.factorize_anchor(anchor, block, fem::fill_reducing_ordering(anchor)));
+  Eigen::MatrixXd current = Eigen::MatrixXd(Eigen::SparseMatrix<double>(anchor.selfadjointView<Eigen::Lower>()));
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Eigen::MatrixXd rhs(g.size(), 2);
+  for (Eigen::Index i = 0; i < rhs.size(); ++i) rhs.data()[i] = u(rng);
+  long long refactorized = 0;
+  for (const Eigen::Index first : {m / 2, 2 * m / 3, m / 5, m - 3, Eigen::Index{0}, m / 2 + 1, m / 2 + 2, m / 3}) {
+    // A symmetric change on the trailing dofs that keeps the matrix positive definite.
+    Eigen::MatrixXd change = Eigen::MatrixXd::Zero(m - first, m - first);
+    for (Eigen::Index i = 0; i < change.rows(); ++i) {
+      change(i, i) = 0.5 + 0.5 * u(rng);
+      for (Eigen::Index j = 0; j < i; ++j) change(i, j) = change(j, i) = 0.01 * u(rng);
+    }
+    for (Eigen::Index i = first; i < m; ++i)
+      for (Eigen::Index j = first; j < m; ++j) current(block[static_cast<std::size_t>(i)], block[static_cast<std::size_t>(j)]) += change(i - first, j - first);
+    ASSERT_TRUE(solver.refactorize_trailing(first, [&](Eigen::Ref<Eigen::MatrixXd> T) { T += change; })) << first;
+    refactorized += m - first;
+    const Eigen::MatrixXd x = solver.solve(rhs);
+    EXPECT_LT(relative_difference(x, current.llt().solve(rhs)), 1e-11) << first;
+    EXPECT_LT((current * x - rhs).norm(), 1e-12 * rhs.norm()) << first;
+  }
+  EXPECT_EQ(solver.trailing_dofs(), refactorized);
+  // Back to the anchor: the next change is measured from it.
+  solver.reset_to_anchor();
+  const Eigen::MatrixXd reference = Eigen::MatrixXd(Eigen::SparseMatrix<double>(anchor.selfadjointView<Eigen::Lower>()));
+  EXPECT_LT(relative_difference(solver.solve(rhs), reference.llt().solve(rhs)), 1e-11);
+  EXPECT_THROW(solver.refactorize_trailing(m + 1, [](Eigen::Ref<Eigen::MatrixXd>) {}), std::invalid_argument);
+}
+
 TEST(TrailingBlockCholesky, RefusesAnIndefiniteBlockAndKeepsThePreviousOne) {
   const Grid g{6, 6, 4};
   std::vector<char> in_block(static_cast<std::size_t>(g.size()), 0);
@@ -105,9 +153,7 @@ TEST(TrailingBlockCholesky, RefusesAnIndefiniteBlockAndKeepsThePreviousOne) {
   const Eigen::SparseMatrix<double> A = laplacian(g, in_block, 1.0);
   fem::TrailingBlockCholesky solver;
   ASSERT_TRUE(solver.factorize_anchor(A, block, fem::fill_reducing_ordering(A)));
-  Eigen::MatrixXd indefinite = solver.anchor_schur();
-  indefinite(3, 3) = -1;
-  EXPECT_FALSE(solver.refactorize(indefinite));
+  EXPECT_FALSE(solver.refactorize_trailing(2, [](Eigen::Ref<Eigen::MatrixXd> T) { T(1, 1) = -1; }));
   const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(g.size(), -1, 2);
   const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> reference(A);
   EXPECT_LT(relative_difference(solver.solve(b), reference.solve(b)), 1e-11);
@@ -165,12 +211,20 @@ struct MachinedPlate {
   }
 };
 
+// The flagged elements change at every later station of a run of `stations`.
+fem::RunChanges changing_throughout(const std::vector<char>& flagged, int stations) {
+  fem::RunChanges run{std::vector<int>(flagged.size(), 0), std::vector<int>(flagged.size(), 0)};
+  for (std::size_t e = 0; e < flagged.size(); ++e)
+    if (flagged[e]) run.first[e] = 1, run.last[e] = stations - 1;
+  return run;
+}
+
 // Station k of a run: the first factorizes with the changing elements' dofs last, the others
 // refactorize that block.
-void factorize_station(fem::ElasticProblem& block, const std::vector<double>& activity, std::size_t k, const std::vector<char>& changing) {
+void factorize_station(fem::ElasticProblem& block, const std::vector<double>& activity, std::size_t k, const fem::RunChanges& changes) {
   block.set_activity(activity);
   if (k == 0)
-    block.assemble_and_factorize_anchor(changing);
+    block.assemble_and_factorize_anchor(changes);
   else
     block.refactorize_changed();
 }
@@ -186,7 +240,7 @@ TEST(BlockRefactorization, GivesTheFullFactorizationsDisplacementsAsMaterialGoes
   for (std::size_t k = 0; k < plate.stations.size(); ++k) {
     full.set_activity(plate.stations[k]);
     full.assemble_and_factorize();
-    factorize_station(block, plate.stations[k], k, plate.pocket);
+    factorize_station(block, plate.stations[k], k, changing_throughout(plate.pocket, 4));
     const Eigen::MatrixXd U = full.solve(), X = block.solve();
     EXPECT_LT(relative_difference(X, U), 1e-10) << "station " << k;
   }
@@ -219,7 +273,7 @@ TEST(BlockRefactorization, AFailedResidualCheckSolvesAgainOnAFullFactorization) 
   for (std::size_t k = 0; k < plate.stations.size(); ++k) {
     full.set_activity(plate.stations[k]);
     full.assemble_and_factorize();
-    factorize_station(block, plate.stations[k], k, plate.pocket);
+    factorize_station(block, plate.stations[k], k, changing_throughout(plate.pocket, 4));
     EXPECT_TRUE(block.solve() == full.solve()) << "station " << k;
   }
   // Every station's block solve failed the check and was solved again in full; the next station still
@@ -240,11 +294,105 @@ TEST(BlockRefactorization, ABlockTooLargeToPayFactorizesInFull) {
   for (std::size_t k = 0; k < plate.stations.size(); ++k) {
     full.set_activity(plate.stations[k]);
     full.assemble_and_factorize();
-    factorize_station(block, plate.stations[k], k, everything);
+    factorize_station(block, plate.stations[k], k, changing_throughout(everything, 4));
     EXPECT_TRUE(block.solve() == full.solve()) << "station " << k;
   }
   EXPECT_EQ(block.block_stats().full_chunks, 1);
   EXPECT_EQ(block.block_stats().anchors, 0);
   EXPECT_EQ(block.block_stats().block_refactorizations, 0);
   EXPECT_EQ(block.solver_stats().factorizations, 4);
+}
+
+TEST(BlockRefactorization, StationsRefactorizeFromTheFirstDofTheyChangeAndMayChangeNothing) {
+  // The pocket's four elements machined one after another, one station with no change between:
+  // ordered by their last change, a station's changes start part-way into the block.
+  const MachinedPlate plate;
+  std::vector<int> pocket;
+  for (int e = 0; e < plate.mesh.element_count(); ++e)
+    if (plate.pocket[static_cast<std::size_t>(e)]) pocket.push_back(e);
+  ASSERT_EQ(pocket.size(), 4u);
+  // Per station, each pocket element's fraction.
+  const std::vector<std::array<double, 4>> fractions = {{1, 1, 1, 1}, {0.5, 1, 1, 1}, {0, 1, 1, 1}, {0, 0.3, 1, 1}, {0, 0, 0.6, 1},
+                                                        {0, 0, 0.6, 1}, {0, 0, 0, 0.2}, {0, 0, 0, 0}};
+  std::vector<std::vector<double>> history;
+  for (const auto& f : fractions) {
+    std::vector<double> activity(static_cast<std::size_t>(plate.mesh.element_count()), 1.0);
+    for (std::size_t i = 0; i < 4; ++i) activity[static_cast<std::size_t>(pocket[i])] = f[i];
+    history.push_back(activity);
+  }
+  fem::RunChanges run{std::vector<int>(static_cast<std::size_t>(plate.mesh.element_count()), 0),
+                      std::vector<int>(static_cast<std::size_t>(plate.mesh.element_count()), 0)};
+  for (std::size_t k = 1; k < history.size(); ++k)
+    for (std::size_t e = 0; e < run.first.size(); ++e)
+      if (history[k][e] != history[k - 1][e]) {
+        if (run.first[e] == 0) run.first[e] = static_cast<int>(k);
+        run.last[e] = static_cast<int>(k);
+      }
+  const auto plan = fem::ElasticProblem::plan_block(plate.mesh, run);
+  EXPECT_EQ(plan.stations, 8);
+
+  fem::ElasticProblem full = plate.problem(), block = plate.problem();
+  full.equilibrate(fem::isostatic_dofs(plate.mesh, plate.shape, std::vector<char>(static_cast<std::size_t>(plate.mesh.node_count()), 1)));
+  block.adopt_equilibrium(full);
+  for (std::size_t k = 0; k < history.size(); ++k) {
+    full.set_activity(history[k]);
+    full.assemble_and_factorize();
+    factorize_station(block, history[k], k, run);
+    EXPECT_LT(relative_difference(block.solve(), full.solve()), 1e-10) << "station " << k;
+  }
+  const auto& stats = block.block_stats();
+  EXPECT_EQ(stats.anchors, 1);
+  EXPECT_EQ(stats.block_refactorizations, 6);
+  EXPECT_EQ(stats.unchanged_stations, 1);
+  EXPECT_EQ(stats.block_dofs, static_cast<long long>(plan.dofs.size()));
+  // Later stations refactorized less than the whole block.
+  EXPECT_LT(stats.trailing_dofs, 6 * stats.block_dofs);
+  EXPECT_EQ(stats.residual_fallbacks, 0);
+  // Block solves checked on every row: the anchor's and every kWholeResidualEvery-th after it.
+  EXPECT_EQ(stats.whole_residuals, 2);
+}
+
+TEST(BlockPlan, OrdersTheBlockByLastChangeAndBoundsTheRefactorizations) {
+  // Three elements in a row: the first changes at station 1, the second at 1 and 3, the third at 2.
+  const auto shape = levelset::PartShape::plate(30, 10, 10);
+  const auto mesh = fem::make_structured_hex_mesh(shape, {3, 1, 1, 1.0});
+  ASSERT_EQ(mesh.element_count(), 3);
+  auto element_at = [&](double x) {
+    for (int e = 0; e < 3; ++e)
+      if (std::abs(mesh.centroid(e).x() - x) < 1) return e;
+    return -1;
+  };
+  const int a = element_at(5), b = element_at(15), c = element_at(25);
+  fem::RunChanges run{{0, 0, 0}, {0, 0, 0}};
+  run.first[static_cast<std::size_t>(a)] = 1, run.last[static_cast<std::size_t>(a)] = 1;
+  run.first[static_cast<std::size_t>(b)] = 1, run.last[static_cast<std::size_t>(b)] = 3;
+  run.first[static_cast<std::size_t>(c)] = 2, run.last[static_cast<std::size_t>(c)] = 2;
+  const auto plan = fem::ElasticProblem::plan_block(mesh, run);
+  EXPECT_EQ(plan.stations, 4);
+  ASSERT_EQ(plan.dofs.size(), 3u * static_cast<std::size_t>(mesh.node_count()));
+  // A node's last change is its elements' latest: a's own nodes (last 1), then c's own (last 2), then
+  // b's, shared ones included (last 3); each node's three dofs together.
+  std::vector<int> node_last(static_cast<std::size_t>(mesh.node_count()), 0);
+  for (int e : {a, b, c})
+    for (int n : mesh.element(e)) node_last[static_cast<std::size_t>(n)] = std::max(node_last[static_cast<std::size_t>(n)], run.last[static_cast<std::size_t>(e)]);
+  for (std::size_t i = 0; i < plan.dofs.size(); ++i) {
+    EXPECT_EQ(plan.dofs[i] % 3, static_cast<int>(i % 3));
+    if (i > 0) {
+      EXPECT_LE(node_last[static_cast<std::size_t>(plan.dofs[i - 1] / 3)], node_last[static_cast<std::size_t>(plan.dofs[i] / 3)]);
+    }
+  }
+  // The flops: t = m, m less a's own nodes' dofs, less c's too, trailing at stations 1, 2, 3.
+  const double m = static_cast<double>(plan.dofs.size());
+  double own_a = 0, own_c = 0;
+  for (int last : node_last) own_a += last == 1, own_c += last == 2;
+  const double t2 = m - 3 * own_a, t3 = t2 - 3 * own_c;
+  auto cube = [](double t) { return t * t * t / 3; };
+  const double expected = 2 * cube(m) + cube(t2) + std::min(t2 * t2 * (m - t2), cube(t2)) + cube(t3) + std::min(t3 * t3 * (t2 - t3), cube(t3));
+  EXPECT_NEAR(plan.refactorization_flops, expected, 1e-9 * expected);
+  // It pays where a full factorization costs more than the block's dense work over 4 stations.
+  EXPECT_TRUE(fem::ElasticProblem::block_pays(plan, expected));
+  EXPECT_FALSE(fem::ElasticProblem::block_pays(plan, 1.0));
+  // A change before the first one is the caller's error.
+  run.first[static_cast<std::size_t>(c)] = 3;
+  EXPECT_THROW(fem::ElasticProblem::plan_block(mesh, run), std::invalid_argument);
 }

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <numeric>
+#include <stdexcept>
 
 using namespace drom::offline;
 
@@ -140,6 +141,25 @@ TEST(ActivityHistory, ReplaysEveryStationBitForBitFromItsBytes) {
   EXPECT_THROW(ActivityHistory::from_bytes(broken, "test"), drom::InputError);
 }
 
+TEST(ActivityHistory, RunChangesSayWhichStationsChangeEachElementFirstAndLast) {
+  ActivityHistory history(4);
+  // Element 0 goes at stations 1 and 3; element 1 at station 2; element 2 only drifts below the
+  // floor (from 5e-4 to 1e-4: removed both times for the FE); element 3 never changes.
+  for (const auto& s : std::vector<std::vector<double>>{{1, 1, 5e-4, 1}, {0.6, 1, 5e-4, 1}, {0.6, 0.2, 1e-4, 1}, {0, 0.2, 1e-4, 1}, {0, 0.2, 1e-4, 1}})
+    history.append(s);
+  auto run = history.run_changes(0, 5, 1e-3);
+  EXPECT_EQ(run.first, (std::vector<int>{1, 2, 0, 0}));
+  EXPECT_EQ(run.last, (std::vector<int>{3, 2, 0, 0}));
+  // Counted from the run's own first station, which changes nothing itself.
+  run = history.run_changes(2, 5, 1e-3);
+  EXPECT_EQ(run.first, (std::vector<int>{1, 0, 0, 0}));
+  EXPECT_EQ(run.last, (std::vector<int>{1, 0, 0, 0}));
+  // Without a floor, the drift is a change.
+  EXPECT_EQ(history.run_changes(0, 5, 0).last[2], 2);
+  EXPECT_THROW(history.run_changes(3, 3, 1e-3), std::out_of_range);
+  EXPECT_THROW(history.run_changes(0, 6, 1e-3), std::out_of_range);
+}
+
 namespace {
 
 // A 16 x 16 x 2 plate whose top layer the tool crosses row by row, `per_station` elements a station.
@@ -174,9 +194,9 @@ TEST(StationSchedule, StationsPerFactorizationFollowTheBlockCostModel) {
   // Each estimate falls as C grows while blocks stay cheap.
   for (std::size_t i = 1; i < choice.estimates.size(); ++i) EXPECT_LT(choice.estimates[i].second, choice.estimates[i - 1].second);
 
-  // A full factorization so cheap that no block of two elements pays (m = 3 x 32 nodes = 96 dofs:
-  // m^3/3 > F/4 for F < 1.2e6): one full factorization a station, every C costing the same (ties
-  // go to the smaller C).
+  // A full factorization so cheap that no block pays (two elements' m = 3 x 32 nodes = 96 dofs, and
+  // a chunk of two stations pays only if F + m^3/3 + (m^3/3 + m^3/3) < 2 F, F > 8.8e5): one full
+  // factorization a station, every C costing the same (ties go to the smaller C).
   choice = choose_stations_per_factorization(history, mesh, 1e5);
   EXPECT_EQ(choice.chunk, 1u);
   for (const auto& [C, cost] : choice.estimates) EXPECT_DOUBLE_EQ(cost, 128 * 1.1 * 1e5) << C;
