@@ -129,8 +129,8 @@ int main(int argc, char** argv) {
               history.size(), chunk, static_cast<long long>(P));
   if (!estimates.empty()) std::printf("  \"chunk_chosen_from\": {%s},\n", estimates.c_str());
   std::printf("  \"full_s_per_station\": %.4f,\n  \"block_s_per_station\": %.4f,\n  \"speedup\": %.2f,\n", full_s / ns, block_s / ns, full_s / block_s);
-  std::printf("  \"block\": {\"anchors\": %d, \"mean_block_dofs\": %.0f, \"refactorizations\": %d, \"mean_trailing_dofs\": %.0f, \"unchanged_stations\": %d, \"full_chunks\": %d, \"residual_fallbacks\": %d,\n",
-              b.anchors, static_cast<double>(b.block_dofs) / std::max(1, b.anchors), b.block_refactorizations,
+  std::printf("  \"block\": {\"anchors\": %d, \"by_first_change\": %d, \"mean_block_dofs\": %.0f, \"refactorizations\": %d, \"mean_trailing_dofs\": %.0f, \"unchanged_stations\": %d, \"full_chunks\": %d, \"residual_fallbacks\": %d,\n",
+              b.anchors, b.anchors_by_first_change, static_cast<double>(b.block_dofs) / std::max(1, b.anchors), b.block_refactorizations,
               static_cast<double>(b.trailing_dofs) / std::max(1, b.block_refactorizations), b.unchanged_stations, b.full_chunks, b.residual_fallbacks);
   std::printf("            \"anchor_s\": %.3f, \"refactorize_s\": %.3f, \"solve_s\": %.3f, \"residual_s\": %.3f},\n", b.anchor_seconds, b.refactorize_seconds,
               b.solve_seconds, b.residual_seconds);

@@ -181,43 +181,68 @@ void ElasticProblem::assemble_and_factorize() {
 BlockPlan ElasticProblem::plan_block(const Mesh& mesh, const RunChanges& changes) {
   if (static_cast<int>(changes.last.size()) != mesh.element_count() || changes.first.size() != changes.last.size())
     throw std::invalid_argument("plan_block: one first and one last change per element");
-  // Per node: the last station that changes it, and the first (of the elements last changed then).
-  std::vector<int> node_last(static_cast<std::size_t>(mesh.node_count()), 0), node_first(node_last.size(), 0);
-  BlockPlan plan;
+  // Per node: the first and the last station that change one of its elements.
+  std::vector<int> node_first(static_cast<std::size_t>(mesh.node_count()), 0), node_last(node_first.size(), 0);
+  int stations = 1;
   for (int e = 0; e < mesh.element_count(); ++e) {
     const auto i = static_cast<std::size_t>(e);
-    const int last = changes.last[i], first = changes.first[i];
+    const int first = changes.first[i], last = changes.last[i];
     if (last <= 0) continue;
     if (first <= 0 || first > last) throw std::invalid_argument("plan_block: an element's first change must come before its last");
-    plan.stations = std::max(plan.stations, last + 1);
+    stations = std::max(stations, last + 1);
     for (int n : mesh.element(e)) {
       const auto k = static_cast<std::size_t>(n);
-      if (last > node_last[k]) node_last[k] = last, node_first[k] = first;
-      else if (last == node_last[k]) node_first[k] = std::min(node_first[k], first);
+      node_first[k] = node_first[k] ? std::min(node_first[k], first) : first;
+      node_last[k] = std::max(node_last[k], last);
     }
   }
   std::vector<int> nodes;
   for (int n = 0; n < mesh.node_count(); ++n)
     if (node_last[static_cast<std::size_t>(n)] > 0) nodes.push_back(n);
+  const double m = 3.0 * static_cast<double>(nodes.size());
+  // Per station j = 1 .. stations - 1, at most t_j trailing dofs, and the flops of forming T (from the
+  // last one's: TrailingBlockCholesky::refactorize_trailing) and refactorizing it.
+  auto flops = [&](auto trailing) {
+    double total = 0, previous = m;  // at the anchor, T is formed from L_BB: as if moved back from m
+    bool from_anchor = true;
+    for (int j = 1; j < stations; ++j) {
+      const double t = trailing(j);
+      double form;
+      if (from_anchor) {
+        form = t * t * t / 3;
+      } else if (t <= previous) {
+        form = std::min(t * t * (previous - t), t * t * t / 3);
+      } else {
+        const double k = t - previous;
+        form = k * k * k / 3 + previous * k * k + previous * previous * k;
+      }
+      total += form + t * t * t / 3;
+      previous = t;
+      from_anchor = false;
+    }
+    return total;
+  };
+  // Two orders, the cheaper kept. By last change: at station j only the dofs changed at j or later
+  // trail. By first change, latest first: only those first changed at j or before. Where the tool
+  // comes back over its own passes within a run, dofs are changed late, and the second wins.
+  std::vector<double> count_last(static_cast<std::size_t>(stations) + 1, 0), count_first(count_last.size(), 0);
+  for (int n : nodes) count_last[static_cast<std::size_t>(node_last[static_cast<std::size_t>(n)])] += 3, count_first[static_cast<std::size_t>(node_first[static_cast<std::size_t>(n)])] += 3;
+  std::vector<double> at_or_after_last(count_last.size() + 1, 0), at_or_before_first(count_first.size(), 0);
+  for (std::size_t j = count_last.size(); j-- > 0;) at_or_after_last[j] = at_or_after_last[j + 1] + count_last[j];
+  for (std::size_t j = 1; j < count_first.size(); ++j) at_or_before_first[j] = at_or_before_first[j - 1] + count_first[j];
+  const double by_last = flops([&](int j) { return at_or_after_last[static_cast<std::size_t>(j)]; });
+  const double by_first = flops([&](int j) { return at_or_before_first[static_cast<std::size_t>(j)]; });
+  BlockPlan plan;
+  plan.stations = stations;
+  plan.by_first_change = by_first < by_last;
+  plan.refactorization_flops = std::min(by_first, by_last);
   std::stable_sort(nodes.begin(), nodes.end(), [&](int a, int b) {
     const auto i = static_cast<std::size_t>(a), j = static_cast<std::size_t>(b);
+    if (plan.by_first_change) return node_first[i] != node_first[j] ? node_first[i] > node_first[j] : node_last[i] < node_last[j];
     return node_last[i] != node_last[j] ? node_last[i] < node_last[j] : node_first[i] > node_first[j];
   });
-  std::vector<int> count(static_cast<std::size_t>(plan.stations) + 1, 0);
-  for (int n : nodes) {
-    ++count[static_cast<std::size_t>(node_last[static_cast<std::size_t>(n)])];
+  for (int n : nodes)
     for (int c = 0; c < 3; ++c) plan.dofs.push_back(3 * n + c);
-  }
-  // Station j refactorizes at most the dofs last changed at j or later (t of them); it forms their T
-  // from the last one's, subtracting the columns that left (t^2 k), or from the factor (t^3 / 3).
-  double previous = static_cast<double>(plan.dofs.size());
-  double t = previous;
-  for (int j = 1; j < plan.stations; ++j) {
-    if (j > 1) t -= 3.0 * count[static_cast<std::size_t>(j - 1)];
-    const double form = j == 1 ? t * t * t / 3 : std::min(t * t * (previous - t), t * t * t / 3);
-    plan.refactorization_flops += t * t * t / 3 + form;
-    previous = t;
-  }
   return plan;
 }
 
@@ -256,6 +281,7 @@ void ElasticProblem::assemble_and_factorize_anchor(const RunChanges& changes) {
     return;
   }
   ++block_stats_.anchors;
+  block_stats_.anchors_by_first_change += plan.by_first_change;
   block_stats_.block_dofs += static_cast<long long>(plan.dofs.size());
   block_solves_ = 0;
   // K's block rows, both triangles, for block_row_residuals.

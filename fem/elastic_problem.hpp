@@ -30,6 +30,7 @@ namespace drom::fem {
 // What the block refactorization (assemble_and_factorize_anchor / refactorize_changed) did.
 struct BlockStats {
   int anchors = 0;               // factorizations with a block eliminated last (blocks that paid)
+  int anchors_by_first_change = 0;  // of which the block was ordered by first change (BlockPlan)
   int block_refactorizations = 0;  // stations that refactorized only their block (its trailing part)
   int unchanged_stations = 0;    // later stations of a run that changed nothing since the last: nothing refactorized
   int full_chunks = 0;           // anchors whose block was too large to pay: factorized in full instead
@@ -52,14 +53,18 @@ struct RunChanges {
 // The block of a run of stations (ElasticProblem::assemble_and_factorize_anchor) and what its
 // refactorizations are expected to cost.
 struct BlockPlan {
-  // The dofs of the elements the run's later stations change, in elimination order: by the last
-  // station that changes them; among equals, those first changed later come first; then by dof. At
-  // station j a dof last changed before j stays in the leading part of S's factor: only the trailing
-  // part, from the first dof changed at j, is refactorized.
+  // The dofs of the elements the run's later stations change, in elimination order. At station j
+  // only the trailing part of S's factor, from the first dof changed at j, is refactorized; of two
+  // orders, the one whose estimated flops are fewer:
+  //   by the last station that changes them (station j's trailing part: at most the dofs changed at
+  //   j or later);
+  //   by the first, latest first (by_first_change; at most the dofs first changed at j or before).
+  // A node's three dofs are consecutive.
   std::vector<int> dofs;
+  bool by_first_change = false;
   int stations = 1;  // the run's stations up to its last change (the anchor is station 0)
-  // Dense flops of stations 1 .. stations - 1: t^3 / 3 to refactorize the t trailing dofs (those
-  // changed at the station or later: an upper bound), plus forming their T (TrailingBlockCholesky).
+  // Dense flops of stations 1 .. stations - 1: t^3 / 3 to refactorize the t trailing dofs (the
+  // bounds above), plus forming their T (TrailingBlockCholesky::refactorize_trailing).
   double refactorization_flops = 0;
 };
 
