@@ -352,47 +352,83 @@ TEST(BlockRefactorization, StationsRefactorizeFromTheFirstDofTheyChangeAndMayCha
   EXPECT_EQ(stats.whole_residuals, 2);
 }
 
-TEST(BlockPlan, OrdersTheBlockByLastChangeAndBoundsTheRefactorizations) {
-  // Three elements in a row: the first changes at station 1, the second at 1 and 3, the third at 2.
+namespace {
+
+// What BlockPlan's estimate should be for trailing sizes t_1 .. t_{J-1} (recomputed here from the
+// trailing sizes, not from the plan): forming T (from L_BB at station 1, then from the last T,
+// moved on or back) and refactorizing it.
+double plan_flops(const std::vector<double>& t, double m) {
+  auto cube = [](double x) { return x * x * x / 3; };
+  double total = 0, previous = m;
+  for (std::size_t j = 0; j < t.size(); ++j) {
+    double form;
+    if (j == 0) form = cube(t[j]);
+    else if (t[j] <= previous) form = std::min(t[j] * t[j] * (previous - t[j]), cube(t[j]));
+    else form = cube(t[j] - previous) + previous * (t[j] - previous) * (t[j] - previous) + previous * previous * (t[j] - previous);
+    total += form + cube(t[j]);
+    previous = t[j];
+  }
+  return total;
+}
+
+}  // namespace
+
+TEST(BlockPlan, OrdersTheBlockByTheCheaperOfLastAndFirstChange) {
+  // Three elements in a row, a, b and c.
   const auto shape = levelset::PartShape::plate(30, 10, 10);
   const auto mesh = fem::make_structured_hex_mesh(shape, {3, 1, 1, 1.0});
   ASSERT_EQ(mesh.element_count(), 3);
   auto element_at = [&](double x) {
     for (int e = 0; e < 3; ++e)
-      if (std::abs(mesh.centroid(e).x() - x) < 1) return e;
-    return -1;
+      if (std::abs(mesh.centroid(e).x() - x) < 1) return static_cast<std::size_t>(e);
+    return std::size_t{99};
   };
-  const int a = element_at(5), b = element_at(15), c = element_at(25);
-  fem::RunChanges run{{0, 0, 0}, {0, 0, 0}};
-  run.first[static_cast<std::size_t>(a)] = 1, run.last[static_cast<std::size_t>(a)] = 1;
-  run.first[static_cast<std::size_t>(b)] = 1, run.last[static_cast<std::size_t>(b)] = 3;
-  run.first[static_cast<std::size_t>(c)] = 2, run.last[static_cast<std::size_t>(c)] = 2;
-  const auto plan = fem::ElasticProblem::plan_block(mesh, run);
-  EXPECT_EQ(plan.stations, 4);
-  ASSERT_EQ(plan.dofs.size(), 3u * static_cast<std::size_t>(mesh.node_count()));
-  // A node's last change is its elements' latest: a's own nodes (last 1), then c's own (last 2), then
-  // b's, shared ones included (last 3); each node's three dofs together.
-  std::vector<int> node_last(static_cast<std::size_t>(mesh.node_count()), 0);
-  for (int e : {a, b, c})
-    for (int n : mesh.element(e)) node_last[static_cast<std::size_t>(n)] = std::max(node_last[static_cast<std::size_t>(n)], run.last[static_cast<std::size_t>(e)]);
-  for (std::size_t i = 0; i < plan.dofs.size(); ++i) {
-    EXPECT_EQ(plan.dofs[i] % 3, static_cast<int>(i % 3));
-    if (i > 0) {
-      EXPECT_LE(node_last[static_cast<std::size_t>(plan.dofs[i - 1] / 3)], node_last[static_cast<std::size_t>(plan.dofs[i] / 3)]);
+  const std::size_t a = element_at(5), b = element_at(15), c = element_at(25);
+  // Per node, the first and last change of its elements; the trailing sizes of both orders.
+  auto check = [&](const fem::RunChanges& run, bool by_first_expected) {
+    const auto plan = fem::ElasticProblem::plan_block(mesh, run);
+    std::vector<int> first(static_cast<std::size_t>(mesh.node_count()), 0), last(first.size(), 0);
+    for (std::size_t e : {a, b, c})
+      for (int n : mesh.element(static_cast<int>(e))) {
+        auto& f = first[static_cast<std::size_t>(n)];
+        f = f ? std::min(f, run.first[e]) : run.first[e];
+        last[static_cast<std::size_t>(n)] = std::max(last[static_cast<std::size_t>(n)], run.last[e]);
+      }
+    const double m = 3.0 * mesh.node_count();
+    EXPECT_EQ(static_cast<double>(plan.dofs.size()), m);
+    std::vector<double> t_last, t_first;
+    for (int j = 1; j < plan.stations; ++j) {
+      t_last.push_back(3.0 * static_cast<double>(std::count_if(last.begin(), last.end(), [&](int l) { return l >= j; })));
+      t_first.push_back(3.0 * static_cast<double>(std::count_if(first.begin(), first.end(), [&](int f) { return f <= j; })));
     }
-  }
-  // The flops: t = m, m less a's own nodes' dofs, less c's too, trailing at stations 1, 2, 3.
-  const double m = static_cast<double>(plan.dofs.size());
-  double own_a = 0, own_c = 0;
-  for (int last : node_last) own_a += last == 1, own_c += last == 2;
-  const double t2 = m - 3 * own_a, t3 = t2 - 3 * own_c;
-  auto cube = [](double t) { return t * t * t / 3; };
-  const double expected = 2 * cube(m) + cube(t2) + std::min(t2 * t2 * (m - t2), cube(t2)) + cube(t3) + std::min(t3 * t3 * (t2 - t3), cube(t3));
-  EXPECT_NEAR(plan.refactorization_flops, expected, 1e-9 * expected);
-  // It pays where a full factorization costs more than the block's dense work over 4 stations.
-  EXPECT_TRUE(fem::ElasticProblem::block_pays(plan, expected));
-  EXPECT_FALSE(fem::ElasticProblem::block_pays(plan, 1.0));
+    const double by_last = plan_flops(t_last, m), by_first = plan_flops(t_first, m);
+    EXPECT_EQ(plan.by_first_change, by_first_expected);
+    EXPECT_EQ(by_first < by_last, by_first_expected);
+    EXPECT_NEAR(plan.refactorization_flops, std::min(by_first, by_last), 1e-9 * by_last);
+    // Each node's three dofs together, in the chosen order.
+    for (std::size_t i = 0; i < plan.dofs.size(); ++i) {
+      EXPECT_EQ(plan.dofs[i] % 3, static_cast<int>(i % 3));
+      if (i == 0) continue;
+      const auto p = static_cast<std::size_t>(plan.dofs[i - 1] / 3), q = static_cast<std::size_t>(plan.dofs[i] / 3);
+      if (by_first_expected) {
+        EXPECT_GE(first[p], first[q]);
+      } else {
+        EXPECT_LE(last[p], last[q]);
+      }
+    }
+    // It pays where a full factorization costs more than the block's dense work.
+    EXPECT_TRUE(fem::ElasticProblem::block_pays(plan, m * m * m));
+    EXPECT_FALSE(fem::ElasticProblem::block_pays(plan, 1.0));
+    return plan;
+  };
+  // The tool crosses a, b, c in turn: by first change, station j refactorizes what it has touched.
+  fem::RunChanges run{{0, 0, 0}, {0, 0, 0}};
+  run.first[a] = run.last[a] = 1, run.first[b] = run.last[b] = 2, run.first[c] = run.last[c] = 3;
+  EXPECT_EQ(check(run, true).stations, 4);
+  // a and b go at once, c over two stations: by last change, station 2 refactorizes c's dofs alone.
+  run.first[a] = run.last[a] = 1, run.first[b] = run.last[b] = 1, run.first[c] = 1, run.last[c] = 2;
+  EXPECT_EQ(check(run, false).stations, 3);
   // A change before the first one is the caller's error.
-  run.first[static_cast<std::size_t>(c)] = 3;
+  run.first[c] = 3;
   EXPECT_THROW(fem::ElasticProblem::plan_block(mesh, run), std::invalid_argument);
 }
