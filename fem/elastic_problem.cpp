@@ -420,30 +420,43 @@ Eigen::MatrixXd ElasticProblem::solve() {
   return U;
 }
 
-Eigen::VectorXd ElasticProblem::block_row_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U) {
-  const auto& block = block_->block();
-  Eigen::MatrixXd R(static_cast<Eigen::Index>(block.size()), F.cols());
-  for (std::size_t b = 0; b < block.size(); ++b) R.row(static_cast<Eigen::Index>(b)) = F.row(block[b]);
-  R.noalias() -= block_rows_ * U;
+namespace {
+
+// ||r_p|| / ||f_p|| per column.
+Eigen::VectorXd relative_norms(const Eigen::MatrixXd& R, const Eigen::MatrixXd& F) {
+  Eigen::VectorXd ratios(F.cols());
+  for (Eigen::Index p = 0; p < F.cols(); ++p) {
+    const double f = F.col(p).norm(), r = R.col(p).norm();
+    ratios(p) = f > 0 ? r / f : (r > 0 ? std::numeric_limits<double>::infinity() : 0.0);
+  }
+  return ratios;
+}
+
+}  // namespace
+
+template <class RowOf>
+void ElasticProblem::subtract_changed_elements(const Eigen::MatrixXd& U, RowOf row_of, Eigen::MatrixXd& R) {
   for (const auto& [e, delta] : changes_since(anchor_activity_)) {
     const auto nodes = mesh_.element(e);
     Eigen::MatrixXd ue(3 * static_cast<Eigen::Index>(nodes.size()), U.cols());
     for (std::size_t a = 0; a < nodes.size(); ++a) ue.middleRows<3>(3 * static_cast<Eigen::Index>(a)) = U.middleRows<3>(3 * nodes[a]);
     const Eigen::MatrixXd fe = delta * (operators_.stiffness(e) * ue);
-    for (std::size_t a = 0; a < nodes.size(); ++a)
-      R.middleRows<3>(block_index_[static_cast<std::size_t>(3 * nodes[a])]) -= fe.middleRows<3>(3 * static_cast<Eigen::Index>(a));
+    for (std::size_t a = 0; a < nodes.size(); ++a) R.middleRows<3>(row_of(nodes[a])) -= fe.middleRows<3>(3 * static_cast<Eigen::Index>(a));
   }
+}
+
+Eigen::VectorXd ElasticProblem::block_row_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U) {
+  const auto& block = block_->block();
+  Eigen::MatrixXd R(static_cast<Eigen::Index>(block.size()), F.cols());
+  for (std::size_t b = 0; b < block.size(); ++b) R.row(static_cast<Eigen::Index>(b)) = F.row(block[b]);
+  R.noalias() -= block_rows_ * U;
+  subtract_changed_elements(U, [&](int node) { return block_index_[static_cast<std::size_t>(3 * node)]; }, R);
   // Held now: held at the anchor (fixed dofs and the orphans then), or orphaned since.
   for (std::size_t b = 0; b < block.size(); ++b) {
     const auto d = static_cast<std::size_t>(block[b]);
     if (orphan_[d] || anchor_held_[d]) R.row(static_cast<Eigen::Index>(b)).setZero();
   }
-  Eigen::VectorXd residuals(F.cols());
-  for (Eigen::Index p = 0; p < F.cols(); ++p) {
-    const double f = F.col(p).norm(), r = R.col(p).norm();
-    residuals(p) = f > 0 ? r / f : (r > 0 ? std::numeric_limits<double>::infinity() : 0.0);
-  }
-  return residuals;
+  return relative_norms(R, F);
 }
 
 Eigen::VectorXd ElasticProblem::column_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U) {
@@ -451,22 +464,11 @@ Eigen::VectorXd ElasticProblem::column_residuals(const Eigen::MatrixXd& F, const
   // held rows are F's zeros.
   Eigen::MatrixXd R = F;
   R.noalias() -= K_.selfadjointView<Eigen::Lower>() * U;
-  for (const auto& [e, delta] : block_current_ ? changes_since(anchor_activity_) : std::vector<std::pair<int, double>>{}) {
-    const auto nodes = mesh_.element(e);
-    Eigen::MatrixXd ue(3 * static_cast<Eigen::Index>(nodes.size()), U.cols());
-    for (std::size_t a = 0; a < nodes.size(); ++a) ue.middleRows<3>(3 * static_cast<Eigen::Index>(a)) = U.middleRows<3>(3 * nodes[a]);
-    const Eigen::MatrixXd fe = delta * (operators_.stiffness(e) * ue);
-    for (std::size_t a = 0; a < nodes.size(); ++a) R.middleRows<3>(3 * nodes[a]) -= fe.middleRows<3>(3 * static_cast<Eigen::Index>(a));
-  }
+  if (block_current_) subtract_changed_elements(U, [](int node) { return 3 * node; }, R);
   for (int d = 0; d < mesh_.dof_count(); ++d)
     if (orphan_[static_cast<std::size_t>(d)]) R.row(d).setZero();
   for (int d : fixed_dofs_) R.row(d).setZero();
-  Eigen::VectorXd residuals(F.cols());
-  for (Eigen::Index p = 0; p < F.cols(); ++p) {
-    const double f = F.col(p).norm(), r = R.col(p).norm();
-    residuals(p) = f > 0 ? r / f : (r > 0 ? std::numeric_limits<double>::infinity() : 0.0);
-  }
-  return residuals;
+  return relative_norms(R, F);
 }
 
 void ElasticProblem::set_profile_groups(std::vector<int> sizes) {

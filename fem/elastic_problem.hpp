@@ -179,6 +179,10 @@ class ElasticProblem {
   Eigen::VectorXd column_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U);
   // The same on the block's rows only (relative to the whole ||f_p||).
   Eigen::VectorXd block_row_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U);
+  // R -= sum over the elements changed since the anchor of (a - a_anchor) K_e u_e; a node's three
+  // rows of R start at row_of(node).
+  template <class RowOf>
+  void subtract_changed_elements(const Eigen::MatrixXd& U, RowOf row_of, Eigen::MatrixXd& R);
   Eigen::VectorXd gather(int e, const Eigen::VectorXd& u) const;
 
   const Mesh& mesh_;

@@ -1,7 +1,7 @@
 // drom run on both cases at the seed's full scale (`--set run.scale=seed`: the case files as
 // written), against the figures stored from this machine's runs and the targets where we
 // meet them. Not in the default suite (label `slow`): on this 2-core machine the curved panel takes
-// about 11 min and the flat plate about 32 min. Run them with
+// about 3 min and the flat plate about 3.5 min. Run them with
 //   ctest --test-dir build -L slow -R SeedScale --output-on-failure
 // docs/closed-loop.md §4 gives the same figures beside the seed's.
 #include "run_checks.hpp"
