@@ -120,8 +120,9 @@ int main(int argc, char** argv) {
       }
     }
   }
-  // The full path's residuals are measured for comparison only, and its one symbolic analysis is the
-  // block path's ordering, done before: neither is part of its stations' time.
+  // The full path's residuals are measured for comparison only, and its one symbolic analysis is
+  // done once a job, as the block path's ordering is (before the loop): neither is part of its
+  // stations' time.
   full_s -= full.block_stats().residual_seconds + full.solver_stats().analyze_seconds;
   const auto& b = block.block_stats();
   const double ns = static_cast<double>(history.size());

@@ -34,8 +34,8 @@ struct BlockStats {
   int block_refactorizations = 0;  // stations that refactorized only their block (its trailing part)
   int unchanged_stations = 0;    // later stations of a run that changed nothing since the last: nothing refactorized
   int full_chunks = 0;           // anchors whose block was too large to pay: factorized in full instead
-  int residual_fallbacks = 0;
-  int whole_residuals = 0;       // block solves checked on every row (the others: on the block's rows)    // group solves whose residual failed the bound: solved again in full
+  int residual_fallbacks = 0;    // group solves whose residual failed the bound: solved again in full
+  int whole_residuals = 0;       // block solves checked on every row (the others: on the block's rows)
   long long block_dofs = 0;      // summed over anchors
   long long trailing_dofs = 0;   // refactorized, summed over block refactorizations
   double anchor_seconds = 0, refactorize_seconds = 0, solve_seconds = 0;
@@ -48,6 +48,7 @@ struct BlockStats {
 // the last station of the run that change it, 0 if none does.
 struct RunChanges {
   std::vector<int> first, last;
+  int stations = 1;  // the run's length, its first station included
 };
 
 // The block of a run of stations (ElasticProblem::assemble_and_factorize_anchor) and what its
@@ -62,7 +63,8 @@ struct BlockPlan {
   // A node's three dofs are consecutive.
   std::vector<int> dofs;
   bool by_first_change = false;
-  int stations = 1;  // the run's stations up to its last change (the anchor is station 0)
+  int stations = 1;      // the run's stations up to its last change (the anchor is station 0)
+  int run_stations = 1;  // the run's length (RunChanges::stations), at least `stations`
   // Dense flops of stations 1 .. stations - 1: t^3 / 3 to refactorize the t trailing dofs (the
   // bounds above), plus forming their T (TrailingBlockCholesky::refactorize_trailing).
   double refactorization_flops = 0;
@@ -104,9 +106,10 @@ class ElasticProblem {
   // in full instead, and the run's stations do too.
   void assemble_and_factorize_anchor(const RunChanges& changes);
   static BlockPlan plan_block(const Mesh& mesh, const RunChanges& changes);
-  // Whether a run's block pays against a full factorization of `full_flops` at each of its stations:
-  // its anchor (F + m^3 / 3) and refactorizations cost fewer flops, and m <= 4 000 (the dense
-  // matrices a worker keeps: 128 MB each).
+  // Whether a run's block pays against a full factorization of `full_flops` at each of its
+  // run_stations: its anchor (F + m^3 / 3) and refactorizations cost fewer flops, and m <= 4 000
+  // (the dense matrices a worker keeps: 128 MB each). A run that changes nothing pays (m = 0: its
+  // later stations factorize nothing) if it has more than one station.
   static bool block_pays(const BlockPlan& plan, double full_flops);
   // The flops of a full factorization of this problem's stiffness pattern in the fill-reducing order
   // the anchors use (one symbolic analysis, kept).

@@ -30,7 +30,7 @@ void ActivityHistory::advance(std::size_t k, std::vector<double>& fractions) con
 fem::RunChanges ActivityHistory::run_changes(std::size_t first, std::size_t last, double floor) const {
   if (first >= last || last > stations()) throw std::out_of_range("ActivityHistory: stations " + std::to_string(first) + " to " + std::to_string(last));
   std::vector<double> fractions = at(first);
-  fem::RunChanges changes{std::vector<int>(elements_, 0), std::vector<int>(elements_, 0)};
+  fem::RunChanges changes{std::vector<int>(elements_, 0), std::vector<int>(elements_, 0), static_cast<int>(last - first)};
   for (std::size_t k = first + 1; k < last; ++k)
     for (auto i = offsets_[k]; i < offsets_[k + 1]; ++i) {
       const auto e = static_cast<std::size_t>(changed_[i]);

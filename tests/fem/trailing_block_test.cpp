@@ -213,7 +213,7 @@ struct MachinedPlate {
 
 // The flagged elements change at every later station of a run of `stations`.
 fem::RunChanges changing_throughout(const std::vector<char>& flagged, int stations) {
-  fem::RunChanges run{std::vector<int>(flagged.size(), 0), std::vector<int>(flagged.size(), 0)};
+  fem::RunChanges run{std::vector<int>(flagged.size(), 0), std::vector<int>(flagged.size(), 0), stations};
   for (std::size_t e = 0; e < flagged.size(); ++e)
     if (flagged[e]) run.first[e] = 1, run.last[e] = stations - 1;
   return run;
@@ -281,6 +281,52 @@ TEST(BlockRefactorization, AFailedResidualCheckSolvesAgainOnAFullFactorization) 
   EXPECT_EQ(block.block_stats().residual_fallbacks, 4);
   EXPECT_EQ(block.block_stats().block_refactorizations, 3);
   EXPECT_EQ(block.solver_stats().factorizations, 4);
+}
+
+TEST(BlockRefactorization, AfterAFailedResidualCheckTheNextStationsRebuildTheirBlockAndPass) {
+  // Station 1's check fails (a bound no solve meets); stations 2 and 3, checked again at the usual
+  // bound, start S from the anchor's again and keep their block solves.
+  const MachinedPlate plate;
+  fem::ElasticProblem full = plate.problem(), block = plate.problem();
+  full.equilibrate(fem::isostatic_dofs(plate.mesh, plate.shape, std::vector<char>(static_cast<std::size_t>(plate.mesh.node_count()), 1)));
+  block.adopt_equilibrium(full);
+  for (std::size_t k = 0; k < plate.stations.size(); ++k) {
+    full.set_activity(plate.stations[k]);
+    full.assemble_and_factorize();
+    block.set_residual_bound(k == 1 ? 1e-300 : 1e-8);
+    factorize_station(block, plate.stations[k], k, changing_throughout(plate.pocket, 4));
+    const Eigen::MatrixXd U = full.solve(), X = block.solve();
+    if (k == 1) {
+      EXPECT_TRUE(X == U);
+    } else {
+      EXPECT_LT(relative_difference(X, U), 1e-10) << "station " << k;
+    }
+  }
+  const auto& stats = block.block_stats();
+  EXPECT_EQ(stats.residual_fallbacks, 1);
+  EXPECT_EQ(stats.block_refactorizations, 3);
+  EXPECT_EQ(block.solver_stats().factorizations, 1);  // station 1's fallback only
+  // Station 2 refactorized from the anchor's S: the whole block again (every pocket dof changed by then).
+  EXPECT_GE(stats.trailing_dofs, 2 * stats.block_dofs);
+}
+
+TEST(BlockRefactorization, ARunThatChangesNothingFactorizesOnce) {
+  const MachinedPlate plate;
+  fem::ElasticProblem full = plate.problem(), block = plate.problem();
+  full.equilibrate(fem::isostatic_dofs(plate.mesh, plate.shape, std::vector<char>(static_cast<std::size_t>(plate.mesh.node_count()), 1)));
+  block.adopt_equilibrium(full);
+  const std::vector<char> nothing(static_cast<std::size_t>(plate.mesh.element_count()), 0);
+  full.set_activity(plate.stations[2]);
+  full.assemble_and_factorize();
+  const Eigen::MatrixXd U = full.solve();
+  for (std::size_t k = 0; k < 3; ++k) {
+    factorize_station(block, plate.stations[2], k, changing_throughout(nothing, 3));
+    EXPECT_LT(relative_difference(block.solve(), U), 1e-10) << "station " << k;
+  }
+  EXPECT_EQ(block.block_stats().anchors, 1);
+  EXPECT_EQ(block.block_stats().block_dofs, 0);
+  EXPECT_EQ(block.block_stats().unchanged_stations, 2);
+  EXPECT_EQ(block.solver_stats().factorizations, 0);
 }
 
 TEST(BlockRefactorization, ABlockTooLargeToPayFactorizesInFull) {

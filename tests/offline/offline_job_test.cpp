@@ -324,7 +324,10 @@ TEST(Offline, BlockRefactorizationWritesTheFullFactorizationsDatabase) {
       }
       const auto stats = block_statistics(block);
       EXPECT_GT(stats["anchors"].get<int>(), 0) << label;
-      EXPECT_GE(stats["block_refactorizations"].get<int>(), stats["anchors"].get<int>()) << label;
+      // Every chunk's later stations refactorized their block or changed nothing (the last chunk may
+      // hold one station only).
+      EXPECT_GT(stats["block_refactorizations"].get<int>(), 0) << label;
+      EXPECT_GE(stats["block_refactorizations"].get<int>() + stats["unchanged_stations"].get<int>() + 1, stats["anchors"].get<int>()) << label;
       EXPECT_EQ(stats["residual_fallbacks"].get<int>(), 0) << label;
       EXPECT_EQ(block_statistics(full)["anchors"].get<int>(), 0) << label;
     }
