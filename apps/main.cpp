@@ -114,6 +114,8 @@ int main(int argc, char** argv) {
     }
     if (std::string(sub.name) == "finish")
       cmd->add_option("--threads", options.threads, "K values optimised at once (default: one per hardware thread)")->check(CLI::PositiveNumber);
+    if (std::string(sub.name) == "orient")
+      cmd->add_option("--threads", options.threads, "passes integrated and poses checked at once (default: one per hardware thread)")->check(CLI::PositiveNumber);
     if (std::string(sub.name) == "offline" || std::string(sub.name) == "truth") {
       cmd->add_flag("--resume", options.resume, "continue the interrupted run in --out (refuses a different case)");
       cmd->add_option("--stop-after", options.stop_after, "solve at most N stations in this invocation, then stop (resume later)")->check(CLI::NonNegativeNumber);

@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 
 #include <functional>
+#include <optional>
 #include <vector>
 
 namespace drom::paths {
@@ -39,6 +40,9 @@ class ForceField {
  public:
   virtual ~ForceField() = default;
   virtual FieldSample sample(const Eigen::Vector3d& p) const = 0;
+  // The force alone: what the integrator's right-hand sides need (a voxel field then skips its
+  // nearest-distance grid).
+  virtual Eigen::Vector3d force(const Eigen::Vector3d& p) const { return sample(p).force; }
 };
 
 class DirectField : public ForceField {
@@ -108,9 +112,10 @@ struct AxisHistory {
 };
 
 // Integrates one pass from the equilibrium at s = 0 (settle_start), or from θ = θ_prog, θ̇ = 0 (the seed's). `nodes`: the tool's nodes,
-// local frame (ignored by the point-G model).
+// local frame (ignored by the point-G model). `start`: the (θf, θt) the pendulum is released from at
+// s = 0 instead of θprog (a collision-free start when the programmed one collides).
 AxisHistory integrate_axis(const FramedPath& path, const std::vector<Eigen::Vector3d>& nodes, const ForceField& field,
-                           const DynamicsSettings& settings);
+                           const DynamicsSettings& settings, const std::optional<Eigen::Vector2d>& start = std::nullopt);
 
 // Generic integrators, exposed for their validation (seed Annex A1): y' = f(t, y) from t0 to each of
 // `times`, returning y there.

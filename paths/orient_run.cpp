@@ -13,12 +13,16 @@
 #include "support/vtk_fields.hpp"
 
 #include <Eigen/Geometry>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <mutex>
 #include <numbers>
 #include <sstream>
 #include <type_traits>
@@ -169,6 +173,7 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
   c.voxel_settings.interpolation = interp == "trilinear" ? VoxelInterpolation::trilinear
                                    : interp == "triquadratic" ? VoxelInterpolation::triquadratic
                                                               : VoxelInterpolation::tricubic;
+  c.voxel_settings.near_field = r.real("field.near_field", Range::non_negative(), c.voxel_settings.near_field);
   if (c.voxel && c.aggregation != Aggregation::F1) r.fail("model.aggregation", "the voxel field stores F1 (the seed's eq. 4.2): use F1 or field.kind = \"direct\"");
   // The check and the machine.
   c.clearance.voxel = r.real("check.voxel", Range::positive(), c.clearance.voxel);
@@ -292,11 +297,42 @@ machine::ClProgram cl_program(const std::vector<std::vector<machine::ClPose>>& p
   return p;
 }
 
+// The pendulum cannot recover a start that collides: a node behind a wall's face is pushed deeper by
+// the face's obstacles, and the exact field's 1/r³ kick can fling the axis over the wall (the panel's
+// first pass, with the holder in a clamp jaw at s = 0, settled 75° over it). So when the programmed
+// axis collides at s = 0, the pendulum is released from the nearest collision-free axis instead:
+// rings of growing tilt about the programmed axis (1° apart, 36 azimuths), measured by the clearance
+// check (no mesh-node luck); the first ring with a pose clear by `margin` gives its clearest pose.
+constexpr double kFreeStartMargin = 1.0;  // mm of clearance a moved start keeps
+
+std::optional<Eigen::Vector2d> free_start(const ClearanceChecker& checker, const FramedPath& path, double margin) {
+  const FramedPath::Frame fr = path.at(0);
+  const auto clearance = [&](double roll, double pitch) { return checker.check(fr.cl, tool_rotation(fr, roll, pitch).col(2)).clearance; };
+  if (clearance(fr.roll_prog, fr.pitch_prog) >= margin) return std::nullopt;
+  constexpr double degree = std::numbers::pi / 180;
+  for (int ring = 1; ring <= 90; ++ring) {
+    double best = -1e300;
+    Eigen::Vector2d best_angles;
+    for (int k = 0; k < 36; ++k) {
+      const double phi = k * 10 * degree;
+      const Eigen::Vector2d angles(fr.roll_prog + ring * degree * std::cos(phi), fr.pitch_prog + ring * degree * std::sin(phi));
+      const double c = clearance(angles(0), angles(1));
+      if (c > best) {
+        best = c;
+        best_angles = angles;
+      }
+    }
+    if (best >= margin) return best_angles;
+  }
+  return std::nullopt;  // none within 90°: the programmed start, and the check will report it
+}
+
 }  // namespace
 
 OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   const OrientScene scene = build_orient_scene(c);
   const ToolBody& tool = scene.tool;
+  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
   auto say = [&](const std::string& line) {
     if (!options.quiet) std::cout << line << std::endl;
   };
@@ -348,10 +384,16 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   const auto t_poses = Clock::now();
   OrientResult result;
   result.passes.resize(scene.passes.size());
-  long evaluations = 0, steps = 0;
-  for (std::size_t p = 0; p < scene.passes.size(); ++p) {
+  // Passes are independent (each starts from its own settled start): integrated in parallel.
+  std::atomic<std::size_t> finished{0};
+  std::atomic<int> moved_starts{0};
+  std::mutex progress;
+  const std::size_t tenth = std::max<std::size_t>(1, scene.passes.size() / 10);
+  const auto one_pass = [&](std::size_t p) {
     if (c.model_on) {
-      result.passes[p] = integrate_axis(scene.passes[p], nodes, force, c.dynamics);
+      const std::optional<Eigen::Vector2d> start = c.dynamics.settle_start ? free_start(checker, scene.passes[p], kFreeStartMargin) : std::nullopt;
+      if (start) ++moved_starts;
+      result.passes[p] = integrate_axis(scene.passes[p], nodes, force, c.dynamics, start);
     } else {
       // The programmed axis sampled like the integrated one.
       const FramedPath& path = scene.passes[p];
@@ -367,10 +409,17 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
         result.passes[p].samples.push_back(a);
       }
     }
-    evaluations += result.passes[p].rhs_evaluations;
-    steps += result.passes[p].steps;
-    if (!options.quiet && (p + 1) % std::max<std::size_t>(1, scene.passes.size() / 10) == 0)
-      say("  pass " + std::to_string(p + 1) + "/" + std::to_string(scene.passes.size()) + " (" + scene.pass_names[p] + ")");
+    const std::size_t done = ++finished;
+    if (!options.quiet && done % tenth == 0) {
+      const std::lock_guard lock(progress);
+      say("  " + std::to_string(done) + "/" + std::to_string(scene.passes.size()) + " passes");
+    }
+  };
+  arena.execute([&] { tbb::parallel_for(std::size_t(0), scene.passes.size(), one_pass); });
+  long evaluations = 0, steps = 0;
+  for (const auto& h : result.passes) {
+    evaluations += h.rhs_evaluations;
+    steps += h.steps;
   }
   const double t_pose = seconds_since(t_poses);
 
@@ -385,9 +434,11 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
       before[p].push_back(a.programmed_axis);
       s[p].push_back(a.s);
     }
-  result.after = checker.check_all(cl, after, s);
+  arena.execute([&] { result.after = checker.check_all(cl, after, s); });
   const double t_clear = seconds_since(t_check);
-  result.before = checker.check_all(cl, before, s);
+  const auto t_check_before = Clock::now();
+  arena.execute([&] { result.before = checker.check_all(cl, before, s); });
+  const double t_clear_before = seconds_since(t_check_before);
 
   // The machine: axes along the result, before and after, and the cycle times.
   std::vector<std::vector<machine::ClPose>> poses_after(cl.size()), poses_before(cl.size());
@@ -442,9 +493,11 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
                 {"J_N_mm_s2", c.dynamics.recall.inertia()}, {"c_N_mm_s", c.dynamics.recall.damping()}, {"eta_N_mm3", c.khatib.eta},
                 {"r0_mm", c.khatib.influence_radius}, {"aggregation", aggregation_name(c.aggregation)}, {"moment", moment_model_name(c.dynamics.moment)},
                 {"jerk_lag_s", c.dynamics.jerk_lag}, {"obstacle_nodes", obstacles.size()}, {"tool_nodes", nodes.size()},
-                {"integrator", c.dynamics.adaptive ? "ARKODE Dormand-Prince 4(5)" : "RK4"}, {"rhs_evaluations", evaluations}, {"steps", steps}};
+                {"integrator", c.dynamics.adaptive ? "ARKODE Dormand-Prince 4(5)" : "RK4"}, {"rhs_evaluations", evaluations}, {"steps", steps},
+                {"starts_moved_clear", moved_starts.load()}};
   if (c.voxel)
     j["field"] = {{"kind", "voxel"}, {"voxel_mm", c.voxel_settings.voxel}, {"interpolation", interpolation_name(c.voxel_settings.interpolation)},
+                  {"near_field_voxels", c.voxel_settings.near_field},
                   {"stored_corners", voxels->stored_corners()}, {"pruned_material_corners", voxels->pruned_material_corners()}, {"memory_bytes", voxels->memory_bytes()}};
   else
     j["field"] = {{"kind", "direct"}};
@@ -478,7 +531,8 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   machine_json["unreachable_poses_programmed"] = unreachable_before.size();
   machine_json["unreachable_list_programmed"] = first_of(unreachable_before);
   j["machine"] = machine_json;
-  j["timing_s"] = {{"distance_field", t_distance}, {"voxel_field", t_voxel}, {"poses", t_pose}, {"clearance_check", t_clear}};
+  j["timing_s"] = {{"distance_field", t_distance}, {"voxel_field", t_voxel}, {"poses", t_pose}, {"clearance_check", t_clear},
+                   {"clearance_check_programmed", t_clear_before}, {"threads", arena.max_concurrency()}};
   j["verdict"] = !result.after.collisions.empty() ? "COLLISIONS" : !result.unreachable.empty() ? "OUT OF THE MACHINE'S REACH" : "collision-free";
   result.summary = j;
   say("  max deviation " + std::to_string(max_dev * kDeg) + " deg; worst clearance " + std::to_string(result.after.worst_clearance) + " mm (" +

@@ -75,6 +75,7 @@ struct OrientOptions {
   std::filesystem::path out = "out/orient";
   bool quiet = false;
   bool write_files = true;  // false: compute and return the summary only (tests, benchmark)
+  int threads = 0;          // passes integrated and poses checked at once; 0: one per hardware thread
 };
 
 struct OrientResult {
