@@ -75,6 +75,10 @@ struct FramedPath {
   Frame at(double arc) const;  // linear between samples, f and n re-orthonormalized
 };
 
+// Where the tool's reference point sits for the axis u, from the path's CL at the frame: the CL itself
+// for a ball, CL + offset · e(u) for a torus (DynamicsSettings::contact_offset).
+Eigen::Vector3d reference_point(const FramedPath::Frame& frame, const Eigen::Vector3d& axis, double contact_offset);
+
 // The tool axis for a frame and angles: u = R_t(θt) R_f(θf) n, and the rotation that takes the local
 // tool frame (x = f, y = t, z = n at θ = 0) to the part frame.
 Eigen::Matrix3d tool_rotation(const FramedPath::Frame& frame, double roll, double pitch);
@@ -85,6 +89,12 @@ struct DynamicsSettings {
   double lever_g = 20;           // mm, |CL G| for the point-G model (3.1)
   double jerk_lag = 0;           // τ (s) of the moment's first-order lag; 0: the seed's second-order model
   bool roll_only = false;        // the seed's ch. 3 timing: moment about f only
+  // R − r of a torus (0 for a ball). The seed pivots a ball about its centre, which keeps the contact;
+  // a torus pivoted about the centre of its corner circle would dip (R − r) sin α into the surface. So
+  // the path's CL is the tube's centre over the contact point, CC + r n, and the tool's reference point
+  // (the corner circle's centre) follows the axis u: CL + (R − r) e(u), e(u) the unit of n − (n·u) u
+  // (the rim that dips is on the side the axis leans to; the centre sits back from it).
+  double contact_offset = 0;
   // Integration.
   bool adaptive = true;          // ARKODE; else fixed-step RK4
   double rk4_step = 0.1;         // mm of path per RK4 step
@@ -100,7 +110,10 @@ struct AxisSample {
   double roll_rate = 0, pitch_rate = 0;      // rad/s at the feed
   double roll_acc = 0, pitch_acc = 0;        // rad/s²
   double roll_jerk = 0, pitch_jerk = 0;      // rad/s³ (from the model where the lag is on; else differenced)
-  Eigen::Vector3d cl = Eigen::Vector3d::Zero(), axis = Eigen::Vector3d::UnitZ(), programmed_axis = Eigen::Vector3d::UnitZ();
+  // cl: the tool's reference point (ToolBody's pivot: a ball's centre, a torus's corner-circle centre)
+  // for `axis`; programmed_cl for `programmed_axis` (they differ for a torus only).
+  Eigen::Vector3d cl = Eigen::Vector3d::Zero(), programmed_cl = Eigen::Vector3d::Zero(), axis = Eigen::Vector3d::UnitZ(),
+                  programmed_axis = Eigen::Vector3d::UnitZ();
   Eigen::Vector3d moment = Eigen::Vector3d::Zero();  // M_rep at CL (N·mm)
   int active_nodes = 0;                      // tool nodes within r0 of an obstacle
   double nearest_node_distance = 1e300;      // mm, tool node to obstacle

@@ -158,6 +158,7 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
   c.dynamics.moment = moment == "G" ? MomentModel::PointG : moment == "lever" ? MomentModel::Lever : MomentModel::Direction;
   c.dynamics.lever_g = r.real("model.lever_g", Range::positive(), t.stick_out - t.pivot_height());
   c.dynamics.jerk_lag = r.real("model.jerk_lag", Range::non_negative(), 0);
+  c.dynamics.contact_offset = t.cutter.radius - t.cutter.corner_radius;  // 0 for a ball
   c.model_on = r.boolean("model.enabled", true);
   // Integration.
   c.dynamics.adaptive = r.choice("integration.method", {"arkode", "rk4"}, "arkode") == "arkode";
@@ -305,14 +306,17 @@ machine::ClProgram cl_program(const std::vector<std::vector<machine::ClPose>>& p
 // check (no mesh-node luck); the first ring with a pose clear by `margin` gives its clearest pose.
 constexpr double kFreeStartMargin = 1.0;  // mm of clearance a moved start keeps
 
-std::optional<Eigen::Vector2d> free_start(const ClearanceChecker& checker, const FramedPath& path, double margin) {
+std::optional<Eigen::Vector2d> free_start(const ClearanceChecker& checker, const FramedPath& path, double contact_offset, double margin) {
   const FramedPath::Frame fr = path.at(0);
-  const auto clearance = [&](double roll, double pitch) { return checker.check(fr.cl, tool_rotation(fr, roll, pitch).col(2)).clearance; };
+  const auto clearance = [&](double roll, double pitch) {
+    const Eigen::Vector3d axis = tool_rotation(fr, roll, pitch).col(2);
+    return checker.check(reference_point(fr, axis, contact_offset), axis).clearance;
+  };
   if (clearance(fr.roll_prog, fr.pitch_prog) >= margin) return std::nullopt;
   constexpr double degree = std::numbers::pi / 180;
   for (int ring = 1; ring <= 90; ++ring) {
     double best = -1e300;
-    Eigen::Vector2d best_angles;
+    Eigen::Vector2d best_angles = Eigen::Vector2d::Zero();
     for (int k = 0; k < 36; ++k) {
       const double phi = k * 10 * degree;
       const Eigen::Vector2d angles(fr.roll_prog + ring * degree * std::cos(phi), fr.pitch_prog + ring * degree * std::sin(phi));
@@ -391,7 +395,7 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   const std::size_t tenth = std::max<std::size_t>(1, scene.passes.size() / 10);
   const auto one_pass = [&](std::size_t p) {
     if (c.model_on) {
-      const std::optional<Eigen::Vector2d> start = c.dynamics.settle_start ? free_start(checker, scene.passes[p], kFreeStartMargin) : std::nullopt;
+      const std::optional<Eigen::Vector2d> start = c.dynamics.settle_start ? free_start(checker, scene.passes[p], c.dynamics.contact_offset, kFreeStartMargin) : std::nullopt;
       if (start) ++moved_starts;
       result.passes[p] = integrate_axis(scene.passes[p], nodes, force, c.dynamics, start);
     } else {
@@ -404,8 +408,8 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
         const FramedPath::Frame fr = path.at(a.s);
         a.roll = fr.roll_prog;
         a.pitch = fr.pitch_prog;
-        a.cl = fr.cl;
         a.axis = a.programmed_axis = tool_rotation(fr, a.roll, a.pitch).col(2);
+        a.cl = a.programmed_cl = reference_point(fr, a.axis, c.dynamics.contact_offset);
         result.passes[p].samples.push_back(a);
       }
     }
@@ -425,11 +429,12 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
 
   // The proof: clearance and gouging of the corrected and of the programmed axes.
   const auto t_check = Clock::now();
-  std::vector<std::vector<Eigen::Vector3d>> cl(result.passes.size()), after(result.passes.size()), before(result.passes.size());
+  std::vector<std::vector<Eigen::Vector3d>> cl(result.passes.size()), cl_before(result.passes.size()), after(result.passes.size()), before(result.passes.size());
   std::vector<std::vector<double>> s(result.passes.size());
   for (std::size_t p = 0; p < result.passes.size(); ++p)
     for (const auto& a : result.passes[p].samples) {
       cl[p].push_back(a.cl);
+      cl_before[p].push_back(a.programmed_cl);
       after[p].push_back(a.axis);
       before[p].push_back(a.programmed_axis);
       s[p].push_back(a.s);
@@ -437,7 +442,7 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   arena.execute([&] { result.after = checker.check_all(cl, after, s); });
   const double t_clear = seconds_since(t_check);
   const auto t_check_before = Clock::now();
-  arena.execute([&] { result.before = checker.check_all(cl, before, s); });
+  arena.execute([&] { result.before = checker.check_all(cl_before, before, s); });
   const double t_clear_before = seconds_since(t_check_before);
 
   // The machine: axes along the result, before and after, and the cycle times.
@@ -445,7 +450,7 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   for (std::size_t p = 0; p < cl.size(); ++p)
     for (std::size_t i = 0; i < cl[p].size(); ++i) {
       poses_after[p].push_back({cl[p][i] - tool.pivot_height() * after[p][i], after[p][i]});
-      poses_before[p].push_back({cl[p][i] - tool.pivot_height() * before[p][i], before[p][i]});
+      poses_before[p].push_back({cl_before[p][i] - tool.pivot_height() * before[p][i], before[p][i]});
     }
   const double feed = c.dynamics.recall.feed;
   json machine_json;

@@ -1,7 +1,9 @@
 // Seed 000's integrator validation (Annex A1) and the forced response of a row of obstacles (§3-2.2):
 // checks 1 and 2 of issue 24.
 #include "paths/axis_dynamics.hpp"
+#include "paths/tool_body.hpp"
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,6 +12,43 @@
 
 namespace drom::paths {
 namespace {
+
+// A torus pivoted about its corner circle's centre would dip (R − r) sin α into the surface; placed by
+// reference_point it touches the plane z = 0 at the contact (0, 0, 0), whatever the tilt's size and
+// direction: the deepest plane point inside the cutter is at depth 0, and the contact is on the cutter.
+TEST(AxisDynamics, ATiltedTorusKeepsItsContactPoint) {
+  ToolBody tool;
+  tool.cutter = {ToolKind::torus, 5, 2};
+  const double offset = tool.cutter.radius - tool.cutter.corner_radius;
+  FramedPath::Frame frame;
+  frame.cl = Eigen::Vector3d(0, 0, tool.pivot_height());  // the tube's centre over the contact
+  frame.f = Eigen::Vector3d::UnitX();
+  frame.n = Eigen::Vector3d::UnitZ();
+  frame.t = frame.f.cross(frame.n);
+  for (double roll : {-0.5, -0.1, 0.05, 0.3})
+    for (double pitch : {-0.2, 0.0, 0.17, 0.6}) {
+      if (std::hypot(roll, pitch) < 0.03) continue;  // within 1° the reference slides (documented)
+      const Eigen::Matrix3d R = tool_rotation(frame, roll, pitch);
+      const Eigen::Vector3d reference = reference_point(frame, R.col(2), offset);
+      double deepest = 0, at_contact = 1e9, deepest_fixed = 0;
+      for (int i = -60; i <= 60; ++i)
+        for (int j = -60; j <= 60; ++j) {
+          const Eigen::Vector3d p(0.1 * i, 0.1 * j, 0);
+          const double d = cutter_signed_distance(tool, R.transpose() * (p - reference));
+          deepest = std::min(deepest, d);
+          if (i == 0 && j == 0) at_contact = d;
+          // The seed's fixed pivot, for contrast.
+          deepest_fixed = std::min(deepest_fixed, cutter_signed_distance(tool, R.transpose() * (p - frame.cl)));
+        }
+      EXPECT_GT(deepest, -1e-9) << "roll " << roll << " pitch " << pitch;
+      EXPECT_NEAR(at_contact, 0, 1e-9) << "roll " << roll << " pitch " << pitch;
+      const double tilt = std::acos(R.col(2).z());
+      // A fixed pivot dips its corner (R − r) sin(tilt) below the plane; a plane point's depth (its
+      // distance to the cutter's boundary) is that dip where small, less where the boundary is nearer sideways.
+      EXPECT_LT(deepest_fixed, -0.9 * offset * std::sin(tilt)) << "roll " << roll << " pitch " << pitch;
+      EXPECT_GT(deepest_fixed, -offset * std::sin(tilt) - 0.01) << "roll " << roll << " pitch " << pitch;
+    }
+}
 
 // Annex A1, Table 4.3: y' = -2xy, y(0) = 1, step 0.1, against e^{-x^2}.
 TEST(AxisIntegrators, Rk4MatchesAnnexA1) {

@@ -9,6 +9,8 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
 
 namespace drom::paths {
@@ -132,6 +134,49 @@ TEST(OrientClearance, BumpIsCollisionFreeWithTheModelOnly) { expect_proved("bump
 TEST(OrientClearance, CornerIsCollisionFreeWithTheModelOnly) { expect_proved("corner", {}); }
 TEST(OrientClearance, ImpellerVeinIsCollisionFreeWithTheModelOnly) {
   expect_proved("impeller", {"scene.veins=1", "scene.v_first=0.2", "scene.v_last=0.8", "scene.v_step=0.2", "check.voxel=1"});
+}
+
+// STL check surfaces and the torus cutter, on the corner: a clamp 10 mm beside the second leg, on the
+// side the tool now leans to (θf,prog = +0.3), given once as a patch and once as the STL of the same
+// quad. Both are repulsive and both are checked: the programmed axis runs into the clamp alike, the
+// model keeps clear of it alike.
+TEST(OrientClearance, AnStlClampActsAndIsCheckedLikeThePatchItMeshes) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("drom_orient_stl_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  {
+    // Outward (+x) by the winding, as a CAD export writes it.
+    std::ofstream stl(dir / "clamp.stl");
+    stl << "solid clamp\n"
+        << "facet normal 1 0 0\nouter loop\nvertex 50 -70 -2\nvertex 50 -20 -2\nvertex 50 -20 24\nendloop\nendfacet\n"
+        << "facet normal 1 0 0\nouter loop\nvertex 50 -70 -2\nvertex 50 -20 24\nvertex 50 -70 24\nendloop\nendfacet\n"
+        << "endsolid clamp\n";
+  }
+  const std::string scene = "[scene]\nkind = \"corner\"\nroll = 0.3\n";
+  const std::string patch = "[[check_surfaces]]\nkind = \"bezier\"\ncount = [2, 2]\npoints = [[50.0, -70.0, -2.0], [50.0, -70.0, 24.0], [50.0, -20.0, -2.0], [50.0, -20.0, 24.0]]\n";
+  const std::string mesh = "[[check_surfaces]]\nstl = \"" + (dir / "clamp.stl").string() + "\"\n";
+  const OrientResult with_patch = run_orient(parse_orient_case(scene + patch, "<corner + patch clamp>", {}), {"", true, false});
+  const OrientResult with_stl = run_orient(parse_orient_case(scene + mesh, "<corner + STL clamp>", {}), {"", true, false});
+  const OrientResult without = run_orient(parse_orient_case(scene, "<corner>", {}), {"", true, false});
+  std::filesystem::remove_all(dir);
+  std::cout << "clamp as a patch: worst " << with_patch.after.worst_clearance << " mm, programmed " << with_patch.before.worst_clearance << " mm ("
+            << with_patch.before.collisions.size() << " poses); as STL: " << with_stl.after.worst_clearance << " mm, programmed " << with_stl.before.worst_clearance
+            << " mm (" << with_stl.before.collisions.size() << "); no clamp: programmed " << without.before.worst_clearance << " mm ("
+            << without.before.collisions.size() << ")\n";
+  for (const OrientResult* r : {&with_patch, &with_stl}) {
+    EXPECT_TRUE(r->after.collisions.empty()) << r->after.worst_clearance;
+    EXPECT_GT(r->after.worst_clearance, 0);
+    EXPECT_GT(r->before.collisions.size(), without.before.collisions.size() + 50) << "the programmed axis runs into the clamp";
+  }
+  EXPECT_NEAR(with_stl.before.worst_clearance, with_patch.before.worst_clearance, 0.05) << "the same quad, checked alike";
+  EXPECT_NEAR(static_cast<double>(with_stl.before.collisions.size()), static_cast<double>(with_patch.before.collisions.size()), 3);
+  EXPECT_NEAR(with_stl.after.worst_clearance, with_patch.after.worst_clearance, 0.5) << "sampled differently (barycentric vs iso nodes), repelled alike";
+}
+
+// The torus (the seed's R5 r2) on an impeller vein, its 10° lead kept: the tool pivots about the tube's
+// centre over the contact point, so tilting it does not dip its corner into the hub (the gouge check).
+TEST(OrientClearance, ImpellerVeinWithATorusCutterIsCollisionFreeWithTheModelOnly) {
+  expect_proved("impeller", {"scene.veins=1", "scene.v_first=0.2", "scene.v_last=0.8", "scene.v_step=0.2", "check.voxel=1", "tool.kind=torus",
+                             "tool.radius=5", "tool.corner_radius=2"});
 }
 
 // The curved panel of the distortion cases, mounted centred on the C table (its 450 mm would leave the
