@@ -181,6 +181,13 @@ double Kinematics::singularity_distance(const Eigen::Vector3d& axis) const {
   return d;
 }
 
+std::optional<Eigen::Vector3d> Kinematics::singular_direction() const {
+  if (machine_.chain == KinematicChain::ThreeAxis) return std::nullopt;
+  const Eigen::Vector3d& other = v_is_tool_axis_ ? k1_ : k2_;
+  if (std::abs(other.z()) > 1 - 1e-12) return std::nullopt;
+  return (v_is_tool_axis_ ? k2_ : k1_).normalized();
+}
+
 double Kinematics::stroke_value(int j, const Joints& q) const { return j == 2 && tip_controlled_ ? q[2] + machine_.tool_length : q[j]; }
 
 double joint_in_program_units(const Machine& m, int j, double value) { return m.axes[j].rotary ? value * 180 / kPi : value; }

@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -56,6 +57,9 @@ class Kinematics {
   Joints solve_branch(const ClPose& pose, const BranchSplit& split, int branch) const;  // not at a singularity
   // The angle between the tool axis (part frame) and the nearest singular direction (π/2 for a 3-axis machine).
   double singularity_distance(const Eigen::Vector3d& axis) const;
+  // The part-frame direction that tool axis is measured from (either sign), or none: a 3-axis machine,
+  // or a chain singular at every pose.
+  std::optional<Eigen::Vector3d> singular_direction() const;
   // The value checked against joint j's stroke: the joint, or for the tip-controlled chains (3-axis,
   // table-table) Z + tool length, the gauge line.
   double stroke_value(int j, const Joints& q) const;

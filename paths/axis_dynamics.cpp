@@ -122,7 +122,7 @@ class AxisModel {
     if (settings_.moment == MomentModel::PointG) {
       const Eigen::Vector3d lever = offset + R.col(2) * settings_.lever_g;
       const Eigen::Vector3d f = force_at(fr.cl + lever);
-      e.moment = lever.cross(f);
+      e.moment = lever.cross(f) + singularity_moment(R.col(2), fr);
       e.active = f.squaredNorm() > 0 ? 1 : 0;
       return e;
     }
@@ -133,7 +133,22 @@ class AxisModel {
       ++e.active;
       e.moment += settings_.moment == MomentModel::Lever ? Eigen::Vector3d(lever.cross(f)) : Eigen::Vector3d(lever.normalized().cross(f) * mean_lever_);
     }
+    e.moment += singularity_moment(R.col(2), fr);
     return e;
+  }
+
+  // The moment that pushes the axis out of the singular cone: k_s (β0 − β) about d × u, continuous at
+  // the cone's edge (a quadratic potential in the intrusion).
+  Eigen::Vector3d singularity_moment(const Eigen::Vector3d& u, const FramedPath::Frame& fr) const {
+    if (!settings_.singular_direction || settings_.singular_cone <= 0) return Eigen::Vector3d::Zero();
+    Eigen::Vector3d d = *settings_.singular_direction;
+    if (d.dot(u) < 0) d = -d;
+    const double beta = std::acos(std::clamp(d.dot(u), -1.0, 1.0));
+    if (beta >= settings_.singular_cone) return Eigen::Vector3d::Zero();
+    Eigen::Vector3d away = d.cross(u);
+    // On the singular direction itself any way out will do: away from the feed's side.
+    away = away.norm() > 1e-12 ? Eigen::Vector3d(away.normalized()) : fr.f;
+    return settings_.singular_stiffness * settings_.recall.stiffness * (settings_.singular_cone - beta) * away;
   }
 
   // y = (θf, θt, θ̇f, θ̇t [, M*f, M*t]); time derivatives.

@@ -95,6 +95,13 @@ struct DynamicsSettings {
   // (the corner circle's centre) follows the axis u: CL + (R − r) e(u), e(u) the unit of n − (n·u) u
   // (the rim that dips is on the side the axis leans to; the centre sits back from it).
   double contact_offset = 0;
+  // Beyond the seed, the machine's singularity: where the axis comes within `singular_cone` (rad) of
+  // the machine's singular direction (part frame; a table-table machine's C axis), its table must spin
+  // about C at the tilt rate / sin(angle) to follow. A stiff angular spring, singular_stiffness × k
+  // per rad of intrusion, pushes the axis back out of the cone; 0: off (the seed's model).
+  std::optional<Eigen::Vector3d> singular_direction;
+  double singular_cone = 0;
+  double singular_stiffness = 10;
   // Integration.
   bool adaptive = true;          // ARKODE; else fixed-step RK4
   double rk4_step = 0.1;         // mm of path per RK4 step

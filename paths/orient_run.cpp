@@ -159,6 +159,8 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
   c.dynamics.lever_g = r.real("model.lever_g", Range::positive(), t.stick_out - t.pivot_height());
   c.dynamics.jerk_lag = r.real("model.jerk_lag", Range::non_negative(), 0);
   c.dynamics.contact_offset = t.cutter.radius - t.cutter.corner_radius;  // 0 for a ball
+  c.dynamics.singular_cone = r.real("model.singular_cone", Range::closed(0, 0.5), c.dynamics.singular_cone);
+  c.dynamics.singular_stiffness = r.real("model.singular_stiffness", Range::positive(), c.dynamics.singular_stiffness);
   c.model_on = r.boolean("model.enabled", true);
   // Integration.
   c.dynamics.adaptive = r.choice("integration.method", {"arkode", "rk4"}, "arkode") == "arkode";
@@ -354,6 +356,8 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
                        std::to_string(m.axes[z].max - m.axes[z].min) + " mm)");
   }
   const machine::Kinematics kin(m);
+  DynamicsSettings dynamics = c.dynamics;
+  dynamics.singular_direction = kin.singular_direction();
 
   // Precompute: obstacles, tool nodes, the distance field, the voxel field.
   const auto t_pre = Clock::now();
@@ -395,9 +399,9 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   const std::size_t tenth = std::max<std::size_t>(1, scene.passes.size() / 10);
   const auto one_pass = [&](std::size_t p) {
     if (c.model_on) {
-      const std::optional<Eigen::Vector2d> start = c.dynamics.settle_start ? free_start(checker, scene.passes[p], c.dynamics.contact_offset, kFreeStartMargin) : std::nullopt;
+      const std::optional<Eigen::Vector2d> start = dynamics.settle_start ? free_start(checker, scene.passes[p], c.dynamics.contact_offset, kFreeStartMargin) : std::nullopt;
       if (start) ++moved_starts;
-      result.passes[p] = integrate_axis(scene.passes[p], nodes, force, c.dynamics, start);
+      result.passes[p] = integrate_axis(scene.passes[p], nodes, force, dynamics, start);
     } else {
       // The programmed axis sampled like the integrated one.
       const FramedPath& path = scene.passes[p];
@@ -499,7 +503,7 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
                 {"r0_mm", c.khatib.influence_radius}, {"aggregation", aggregation_name(c.aggregation)}, {"moment", moment_model_name(c.dynamics.moment)},
                 {"jerk_lag_s", c.dynamics.jerk_lag}, {"obstacle_nodes", obstacles.size()}, {"tool_nodes", nodes.size()},
                 {"integrator", c.dynamics.adaptive ? "ARKODE Dormand-Prince 4(5)" : "RK4"}, {"rhs_evaluations", evaluations}, {"steps", steps},
-                {"starts_moved_clear", moved_starts.load()}};
+                {"starts_moved_clear", moved_starts.load()}, {"singular_cone_rad", c.dynamics.singular_cone}};
   if (c.voxel)
     j["field"] = {{"kind", "voxel"}, {"voxel_mm", c.voxel_settings.voxel}, {"interpolation", interpolation_name(c.voxel_settings.interpolation)},
                   {"near_field_voxels", c.voxel_settings.near_field},

@@ -290,6 +290,32 @@ TEST(OrientMachine, PosesOutOfReachAreReportedAndTheRestIsWritten) {
   std::filesystem::remove_all(out);
 }
 
+// Beyond the seed, the machine's singularity: on the UCP 710 (A/C table) the corrected axis of the
+// impeller's v = 0.2 passes comes within a fraction of a degree of C's axis (part Z), where the table
+// must spin about C to follow. With model.singular_cone = 5° the axis keeps out of that cone (to the
+// spring's give), the rotary rates fall, and the result stays collision-free.
+TEST(OrientMachine, TheSingularConeKeepsTheAxisOffCsAxis) {
+  const std::vector<std::string> pass{"scene.veins=1", "scene.v_first=0.2", "scene.v_last=0.2", "check.voxel=1"};
+  auto with = pass;
+  with.push_back("model.singular_cone=0.0873");
+  const OrientResult off = run_orient(small_case("impeller", pass), {"", true, false});
+  const OrientResult on = run_orient(small_case("impeller", with), {"", true, false});
+  const auto closest = [](const OrientResult& r) {
+    double least = 1e9;
+    for (const auto& h : r.passes)
+      for (const auto& a : h.samples) least = std::min(least, std::acos(std::min(1.0, std::abs(a.axis.z()))));
+    return least * 180 / std::numbers::pi;
+  };
+  const double rate_off = off.summary["machine"]["max_ratio_to_limit_after"]["velocity"].get<double>();
+  const double rate_on = on.summary["machine"]["max_ratio_to_limit_after"]["velocity"].get<double>();
+  std::cout << "closest to C's axis: " << closest(off) << " deg without the cone, " << closest(on) << " deg with it; rotary velocity " << rate_off
+            << "x -> " << rate_on << "x the limits at the programmed feed\n";
+  EXPECT_LT(closest(off), 2.0) << "the pass this test is about comes near the singularity";
+  EXPECT_GT(closest(on), 4.0) << "5° cone, stiffness 10 k: the recall and the walls press it 0.8° in";
+  EXPECT_LT(rate_on, 0.5 * rate_off);
+  EXPECT_TRUE(on.after.collisions.empty()) << on.after.worst_clearance;
+}
+
 // The passes are placed for the case's tool: CL = S + R n moves with the ball's radius.
 TEST(OrientScenes, PassesFollowTheCasesTool) {
   const OrientScene r5 = build_orient_scene(small_case("panel"));
