@@ -101,6 +101,7 @@ class AxisModel {
     for (const auto& p : nodes) mean_lever_ += p.norm() / static_cast<double>(nodes.size());
     for (const auto& p : nodes) max_lever_ = std::max(max_lever_, p.norm());
     if (settings.moment == MomentModel::PointG) max_lever_ = settings.lever_g;
+    max_lever_ += settings.contact_offset;  // a torus's body also swings with its reference point
   }
   int size() const { return settings_.jerk_lag > 0 ? 6 : 4; }
   double v0() const { return v0_; }
@@ -348,6 +349,69 @@ AxisHistory integrate_axis(const FramedPath& path, const std::vector<Eigen::Vect
       h.samples[i].pitch_jerk = (h.samples[b].pitch_acc - h.samples[a].pitch_acc) / dt;
     }
   return h;
+}
+
+void smooth_axis(AxisHistory& history, const FramedPath& path, double sigma, const DynamicsSettings& settings) {
+  auto& a = history.samples;
+  const std::size_t n = a.size();
+  if (n < 3 || sigma <= 0) return;
+  const double ds = (a.back().s - a.front().s) / static_cast<double>(n - 1), v0 = settings.recall.feed / 60, dt = ds / v0;
+  if (!(ds > 0)) return;
+  const int half = static_cast<int>(std::ceil(3 * sigma / ds));
+  std::vector<double> weight(static_cast<std::size_t>(half) + 1);
+  double total = 0;
+  for (int k = 0; k <= half; ++k) total += (k == 0 ? 1 : 2) * (weight[static_cast<std::size_t>(k)] = std::exp(-0.5 * (k * ds / sigma) * (k * ds / sigma)));
+  std::vector<FramedPath::Frame> frames(n);
+  std::vector<double> roll(n), pitch(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    frames[i] = path.at(a[i].s);
+    roll[i] = a[i].roll - frames[i].roll_prog;
+    pitch[i] = a[i].pitch - frames[i].pitch_prog;
+  }
+  // Odd reflection about the ends: x(−k) = 2 x(0) − x(k), so the end values and slopes stay.
+  const auto at = [&](const std::vector<double>& x, long i) {
+    const long last = static_cast<long>(n) - 1;
+    if (i < 0) return 2 * x.front() - x[static_cast<std::size_t>(std::min(-i, last))];
+    if (i > last) return 2 * x.back() - x[static_cast<std::size_t>(std::max(2 * last - i, 0L))];
+    return x[static_cast<std::size_t>(i)];
+  };
+  const auto smooth = [&](const std::vector<double>& x) {
+    std::vector<double> y(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      double sum = 0;
+      for (int k = -half; k <= half; ++k) sum += weight[static_cast<std::size_t>(std::abs(k))] * at(x, static_cast<long>(i) + k);
+      y[i] = sum / total;
+    }
+    return y;
+  };
+  const std::vector<double> r = smooth(roll), p = smooth(pitch);
+  const auto derivative = [&](const std::vector<double>& x) {
+    std::vector<double> d(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t lo = i == 0 ? 0 : i - 1, hi = std::min(i + 1, n - 1);
+      d[i] = (x[hi] - x[lo]) / (static_cast<double>(hi - lo) * dt);
+    }
+    return d;
+  };
+  std::vector<double> fr(n), pt(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    fr[i] = r[i] + frames[i].roll_prog;
+    pt[i] = p[i] + frames[i].pitch_prog;
+  }
+  const auto r1 = derivative(fr), p1 = derivative(pt), r2 = derivative(r1), p2 = derivative(p1), r3 = derivative(r2), p3 = derivative(p2);
+  for (std::size_t i = 0; i < n; ++i) {
+    AxisSample& s = a[i];
+    s.roll = fr[i];
+    s.pitch = pt[i];
+    s.roll_rate = r1[i];
+    s.pitch_rate = p1[i];
+    s.roll_acc = r2[i];
+    s.pitch_acc = p2[i];
+    s.roll_jerk = r3[i];
+    s.pitch_jerk = p3[i];
+    s.axis = tool_rotation(frames[i], s.roll, s.pitch).col(2);
+    s.cl = reference_point(frames[i], s.axis, settings.contact_offset);
+  }
 }
 
 double free_response(double theta0, double rate0, double omega0, double xi, double t) {

@@ -137,6 +137,14 @@ struct AxisHistory {
 AxisHistory integrate_axis(const FramedPath& path, const std::vector<Eigen::Vector3d>& nodes, const ForceField& field,
                            const DynamicsSettings& settings, const std::optional<Eigen::Vector2d>& start = std::nullopt);
 
+// Beyond the seed, a zero-phase filter of the result: the deviation θ − θprog of each angle smoothed
+// along s by a Gaussian of standard deviation `sigma` (mm; the ends reflected oddly, so the start
+// and end poses stay), then the axis, the reference point, and θ̇, θ̈, θ⃛ (central differences in
+// time) recomputed. Symmetric, so it anticipates as much as it lags: the lag's trouble (the tool
+// reacting late, nearer the wall) does not arise, but a smoothed peak is lower, so the result must be
+// checked again (run_orient does). The moment, active nodes and nearest distance keep the model's.
+void smooth_axis(AxisHistory& history, const FramedPath& path, double sigma, const DynamicsSettings& settings);
+
 // Generic integrators, exposed for their validation (seed Annex A1): y' = f(t, y) from t0 to each of
 // `times`, returning y there.
 using OdeRhs = std::function<void(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dy)>;

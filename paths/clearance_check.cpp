@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <mutex>
+#include <numbers>
 
 namespace drom::paths {
 
@@ -108,8 +109,9 @@ double ObstacleDistance::distance(const Eigen::Vector3d& p) const {
 ClearanceChecker::ClearanceChecker(const OrientScene& scene, const ClearanceSettings& settings) : scene_(scene), settings_(settings) {
   const ToolBody& tool = scene.tool;
   const RevolvedProfile body = tool.body_profile();
-  // Wide enough that any clearance under 10 mm is measured, not just bounded.
-  const double band = body.max_radius() + std::max(settings.required, 0.0) + 10;
+  // Wide enough that any clearance under 5 mm (over check.required) is measured; a larger one reads as
+  // at least 5 mm. 10 mm cost the full impeller's band 40 % more time to build.
+  const double band = body.max_radius() + std::max(settings.required, 0.0) + 5;
   distance_ = std::make_unique<ObstacleDistance>(scene_check_triangles(scene, std::min(1.0, 2 * settings.voxel)), settings.voxel, band);
   // Covering spheres of the body, heights above the pivot.
   const double z0 = body.z.front(), z1 = body.z.back();
@@ -133,23 +135,30 @@ ClearanceChecker::~ClearanceChecker() = default;
 PoseCheck ClearanceChecker::check(const Eigen::Vector3d& cl, const Eigen::Vector3d& axis) const {
   PoseCheck c;
   const ToolBody& tool = scene_.tool;
-  // The distance is 1-Lipschitz: a slab Δ above or below the last one measured is at least d − Δ away,
-  // so slabs whose bound d − Δ − ρ cannot beat the least margin so far are not measured. The slabs
-  // are 0.5 mm apart; far from the walls most of a pose's 100-odd slabs are skipped this way.
-  double measured_at = 0, measured = -1e300;
+  // Every slab is measured. (Skipping slabs by the distance's Lipschitz bound saved 0.3 s a vein, but
+  // the signed reading flips around a patch's open border, and a skipped slab behind one would hide.)
   for (const auto& [height, radius] : slabs_) {
-    if (measured - std::abs(height - measured_at) - radius >= c.clearance) continue;
-    measured = distance_->distance(cl + height * axis);
-    measured_at = height;
-    const double margin = measured - radius;
+    const double margin = distance_->distance(cl + height * axis) - radius;
     if (margin < c.clearance) {
       c.clearance = margin;
       c.clearance_height = height + tool.pivot_height();
     }
   }
-  // The cutter against the check surfaces: the ball (or the torus's covering sphere) and the flutes.
+  // The cutter against the check surfaces: the ball, or the torus covered by a sphere over its flat
+  // bottom (radius √((R − r)² + r²) about the pivot) and 16 spheres along its tube (on the corner
+  // circle, radius √(r² + (chord/2)²)), and the flutes.
   const double R = tool.cutter.radius, r = tool.cutter.corner_radius;
-  double into_check = -(distance_->distance(cl) - (R == r ? R : std::hypot(R - r, r) + 0.0));
+  double into_check = -(distance_->distance(cl) - (R == r ? R : std::sqrt((R - r) * (R - r) + r * r)));
+  if (R != r) {
+    constexpr int kTube = 16;
+    const double chord = 2 * (R - r) * std::sin(std::numbers::pi / kTube), tube = std::sqrt(r * r + 0.25 * chord * chord);
+    const Eigen::Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+    for (int k = 0; k < kTube; ++k) {
+      const double phi = 2 * std::numbers::pi * k / kTube;
+      const Eigen::Vector3d centre = cl + (R - r) * (std::cos(phi) * e1 + std::sin(phi) * e2);
+      into_check = std::max(into_check, -(distance_->distance(centre) - tube));
+    }
+  }
   for (double z = 0.5; z <= tool.flute_length - tool.pivot_height(); z += 0.5)
     into_check = std::max(into_check, -(distance_->distance(cl + z * axis) - std::hypot(R, 0.25)));
   c.gouge_depth = std::max(0.0, into_check);

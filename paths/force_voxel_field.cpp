@@ -114,7 +114,9 @@ VoxelField::VoxelField(const ObstacleCloud& obstacles, const KhatibParameters& k
       if (n < 0) continue;
       if (obstacles.normals()[static_cast<std::size_t>(n)].dot(p - obstacles.points()[static_cast<std::size_t>(n)]) < -std::sqrt(3.0) * h) drop.push_back(q);
     }
-    for (const auto& q : drop) grid.setValueOff(q, openvdb::Vec4s(0, 0, 0, impl_->far));
+    // The force goes, the nearest distance stays: a node that got into the material is still near an
+    // obstacle, so the exact near field still holds it.
+    for (const auto& q : drop) grid.setValueOff(q, openvdb::Vec4s(0, 0, 0, grid.getValue(q)[3]));
     pruned_material_ = drop.size();
     impl_->grid->pruneGrid();
   }
@@ -128,11 +130,14 @@ std::size_t VoxelField::memory_bytes() const { return static_cast<std::size_t>(i
 namespace {
 // One accessor per thread and field (an accessor caches the tree's path: most queries of a pose fall
 // in the same leaves).
-const Vec4Grid::ConstAccessor& accessor(long id, const Vec4Grid& grid) {
+// Unregistered: a registered accessor is reset by its tree's destructor from whichever thread destroys
+// the field, which would race with another thread rebinding its own.
+using Vec4Accessor = openvdb::tree::ValueAccessor<const Vec4Grid::TreeType, false>;
+const Vec4Accessor& accessor(long id, const Vec4Grid& grid) {
   thread_local long bound = 0;
-  thread_local std::optional<Vec4Grid::ConstAccessor> cache;
+  thread_local std::optional<Vec4Accessor> cache;
   if (bound != id) {
-    cache.emplace(grid.getConstAccessor());
+    cache.emplace(grid.tree());
     bound = id;
   }
   return *cache;
@@ -140,7 +145,7 @@ const Vec4Grid::ConstAccessor& accessor(long id, const Vec4Grid& grid) {
 }  // namespace
 
 Eigen::Vector3d VoxelField::grid_force(const Eigen::Vector3d& p, double* nearest) const {
-  const Vec4Grid::ConstAccessor& acc = accessor(impl_->id, *impl_->grid);
+  const Vec4Accessor& acc = accessor(impl_->id, *impl_->grid);
   const double h = impl_->voxel;
   const openvdb::Vec3d index(p.x() / h, p.y() / h, p.z() / h);
   openvdb::Vec4s v = trilinear(acc, index);

@@ -35,6 +35,7 @@ class VoxelField : public ForceField {
  public:
   // `obstacles` must outlive the field when the near field is on (it sums them there).
   VoxelField(const ObstacleCloud& obstacles, const KhatibParameters& khatib, const VoxelFieldSettings& settings);
+  VoxelField(ObstacleCloud&& obstacles, const KhatibParameters& khatib, const VoxelFieldSettings& settings) = delete;
   ~VoxelField() override;
   FieldSample sample(const Eigen::Vector3d& p) const override;
   Eigen::Vector3d force(const Eigen::Vector3d& p) const override;

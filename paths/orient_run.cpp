@@ -159,6 +159,7 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
   c.dynamics.lever_g = r.real("model.lever_g", Range::positive(), t.stick_out - t.pivot_height());
   c.dynamics.jerk_lag = r.real("model.jerk_lag", Range::non_negative(), 0);
   c.dynamics.contact_offset = t.cutter.radius - t.cutter.corner_radius;  // 0 for a ball
+  c.smoothing = r.real("model.smoothing", Range::closed(0, 100), c.smoothing);
   c.dynamics.singular_cone = r.real("model.singular_cone", Range::closed(0, 0.5), c.dynamics.singular_cone);
   c.dynamics.singular_stiffness = r.real("model.singular_stiffness", Range::positive(), c.dynamics.singular_stiffness);
   c.model_on = r.boolean("model.enabled", true);
@@ -303,10 +304,11 @@ machine::ClProgram cl_program(const std::vector<std::vector<machine::ClPose>>& p
 // The pendulum cannot recover a start that collides: a node behind a wall's face is pushed deeper by
 // the face's obstacles, and the exact field's 1/r³ kick can fling the axis over the wall (the panel's
 // first pass, with the holder in a clamp jaw at s = 0, settled 75° over it). So when the programmed
-// axis collides at s = 0, the pendulum is released from the nearest collision-free axis instead:
-// rings of growing tilt about the programmed axis (1° apart, 36 azimuths), measured by the clearance
-// check (no mesh-node luck); the first ring with a pose clear by `margin` gives its clearest pose.
-constexpr double kFreeStartMargin = 1.0;  // mm of clearance a moved start keeps
+// axis collides at s = 0, or comes within `margin` of it, the pendulum is released from the nearest
+// axis clear by `margin` instead: rings of growing tilt about the programmed axis (1° apart, 36
+// azimuths), measured by the clearance check (no mesh-node luck); the first ring with a pose clear by
+// `margin` gives its clearest pose.
+constexpr double kFreeStartMargin = 1.0;  // mm over check.required: a start closer than this is moved, and keeps it
 
 std::optional<Eigen::Vector2d> free_start(const ClearanceChecker& checker, const FramedPath& path, double contact_offset, double margin) {
   const FramedPath::Frame fr = path.at(0);
@@ -399,9 +401,12 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   const std::size_t tenth = std::max<std::size_t>(1, scene.passes.size() / 10);
   const auto one_pass = [&](std::size_t p) {
     if (c.model_on) {
-      const std::optional<Eigen::Vector2d> start = dynamics.settle_start ? free_start(checker, scene.passes[p], c.dynamics.contact_offset, kFreeStartMargin) : std::nullopt;
+      const std::optional<Eigen::Vector2d> start =
+          dynamics.settle_start ? free_start(checker, scene.passes[p], c.dynamics.contact_offset, std::max(c.clearance.required, 0.0) + kFreeStartMargin)
+                                : std::nullopt;
       if (start) ++moved_starts;
       result.passes[p] = integrate_axis(scene.passes[p], nodes, force, dynamics, start);
+      if (c.smoothing > 0) smooth_axis(result.passes[p], scene.passes[p], c.smoothing, dynamics);
     } else {
       // The programmed axis sampled like the integrated one.
       const FramedPath& path = scene.passes[p];
@@ -503,7 +508,7 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
                 {"r0_mm", c.khatib.influence_radius}, {"aggregation", aggregation_name(c.aggregation)}, {"moment", moment_model_name(c.dynamics.moment)},
                 {"jerk_lag_s", c.dynamics.jerk_lag}, {"obstacle_nodes", obstacles.size()}, {"tool_nodes", nodes.size()},
                 {"integrator", c.dynamics.adaptive ? "ARKODE Dormand-Prince 4(5)" : "RK4"}, {"rhs_evaluations", evaluations}, {"steps", steps},
-                {"starts_moved_clear", moved_starts.load()}, {"singular_cone_rad", c.dynamics.singular_cone}};
+                {"starts_moved_clear", moved_starts.load()}, {"singular_cone_rad", c.dynamics.singular_cone}, {"smoothing_mm", c.smoothing}};
   if (c.voxel)
     j["field"] = {{"kind", "voxel"}, {"voxel_mm", c.voxel_settings.voxel}, {"interpolation", interpolation_name(c.voxel_settings.interpolation)},
                   {"near_field_voxels", c.voxel_settings.near_field},

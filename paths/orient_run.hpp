@@ -45,6 +45,7 @@ struct OrientCase {
   double skin_spacing = 1;
   bool voxel = false;
   VoxelFieldSettings voxel_settings;
+  double smoothing = 0;  // mm: σ of the zero-phase filter of the result (smooth_axis); 0: off
   ClearanceSettings clearance;
   std::string machine = "ucp710_like";
   std::optional<Eigen::Vector3d> part_origin;  // machine.part_origin: the scene's own when unset

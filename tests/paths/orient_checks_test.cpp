@@ -117,8 +117,8 @@ OrientCase small_case(const std::string& scene, const std::vector<std::string>& 
   return parse_orient_case("[scene]\nkind = \"" + scene + "\"\n", "<test " + scene + ">", o);
 }
 
-void expect_proved(const OrientCase& on, const std::string& scene) {
-  const OrientResult r = run_orient(on, {"", true, false});
+OrientResult expect_proved(const OrientCase& on, const std::string& scene) {
+  OrientResult r = run_orient(on, {"", true, false});
   EXPECT_TRUE(r.after.collisions.empty()) << scene << ": " << r.after.collisions.size() << " violations, worst " << r.after.worst_clearance << " mm";
   EXPECT_GT(r.after.worst_clearance, 0) << scene;
   EXPECT_FALSE(r.before.collisions.empty()) << scene << ": the programmed axis should collide (worst " << r.before.worst_clearance << " mm)";
@@ -126,14 +126,27 @@ void expect_proved(const OrientCase& on, const std::string& scene) {
   EXPECT_LT(r.after.worst_gouge, 0.01) << scene;
   std::cout << scene << ": worst clearance " << r.after.worst_clearance << " mm with the model, " << r.before.worst_clearance << " mm without ("
             << r.before.collisions.size() << " poses in collision)\n";
+  return r;
 }
 
-void expect_proved(const std::string& scene, const std::vector<std::string>& overrides) { expect_proved(small_case(scene, overrides), scene); }
+void expect_proved(const std::string& scene, const std::vector<std::string>& overrides) { (void)expect_proved(small_case(scene, overrides), scene); }
 
 TEST(OrientClearance, BumpIsCollisionFreeWithTheModelOnly) { expect_proved("bump", {}); }
 TEST(OrientClearance, CornerIsCollisionFreeWithTheModelOnly) { expect_proved("corner", {}); }
 TEST(OrientClearance, ImpellerVeinIsCollisionFreeWithTheModelOnly) {
   expect_proved("impeller", {"scene.veins=1", "scene.v_first=0.2", "scene.v_last=0.8", "scene.v_step=0.2", "check.voxel=1"});
+}
+
+// Passes run in parallel, each from its own settled start: one thread or two give the same result.
+TEST(OrientClearance, OneThreadOrTwoGiveTheSameResult) {
+  const OrientCase c = small_case("impeller", {"scene.veins=1", "scene.v_first=0.2", "scene.v_last=0.8", "scene.v_step=0.2", "check.voxel=1"});
+  const OrientResult one = run_orient(c, {"", true, false, 1}), two = run_orient(c, {"", true, false, 2});
+  ASSERT_EQ(one.passes.size(), two.passes.size());
+  for (std::size_t p = 0; p < one.passes.size(); ++p) {
+    ASSERT_EQ(one.passes[p].samples.size(), two.passes[p].samples.size());
+    for (std::size_t i = 0; i < one.passes[p].samples.size(); ++i) EXPECT_EQ(one.passes[p].samples[i].axis, two.passes[p].samples[i].axis) << p << " " << i;
+  }
+  EXPECT_EQ(one.after.worst_clearance, two.after.worst_clearance);
 }
 
 // STL check surfaces and the torus cutter, on the corner: a clamp 10 mm beside the second leg, on the
@@ -184,7 +197,9 @@ TEST(OrientClearance, ImpellerVeinWithATorusCutterIsCollisionFreeWithTheModelOnl
 // The shipped case (voxel field at 1 mm), every third pass (the first beside the pocket wall y = 75).
 TEST(OrientClearance, PanelIsCollisionFreeWithTheModelOnly) {
   const OrientCase c = load_orient_case(std::filesystem::path(DROM_SOURCE_DIR) / "cases" / "orient_panel.toml", {"scene.stepover=135", "check.voxel=1"});
-  expect_proved(c, "panel");
+  const OrientResult r = expect_proved(c, "panel");
+  // Each pass starts with the holder in a clamp jaw: released from the nearest free axis (free_start).
+  EXPECT_EQ(r.summary["model"]["starts_moved_clear"].get<int>(), 3);
 }
 
 TEST(OrientBadInput, ClearErrors) {
@@ -314,6 +329,27 @@ TEST(OrientMachine, TheSingularConeKeepsTheAxisOffCsAxis) {
   EXPECT_GT(closest(on), 4.0) << "5° cone, stiffness 10 k: the recall and the walls press it 0.8° in";
   EXPECT_LT(rate_on, 0.5 * rate_off);
   EXPECT_TRUE(on.after.collisions.empty()) << on.after.worst_clearance;
+}
+
+// Beyond the seed, the jerk: the Khatib force is only C⁰ where a node enters r0, so θ⃛ jumps there. The
+// zero-phase filter (model.smoothing, σ = d0 = 2 mm) on the corner (20 mm tool) takes θ's largest
+// jerk down by three orders and machine/'s predicted cycle time down with it, and the result is
+// proved again: still collision-free.
+TEST(OrientMachine, SmoothingTheResultBoundsTheJerkAndShortensTheCycle) {
+  const OrientResult raw = run_orient(small_case("corner", {"check.voxel=1"}), {"", true, false});
+  const OrientResult smooth = run_orient(small_case("corner", {"check.voxel=1", "model.smoothing=2"}), {"", true, false});
+  const double jerk_raw = raw.summary["orientation"]["max_jerk_rad_s3"].get<double>(), jerk = smooth.summary["orientation"]["max_jerk_rad_s3"].get<double>();
+  const double cycle_raw = raw.summary["machine"]["cycle_time_after_s"].get<double>(), cycle = smooth.summary["machine"]["cycle_time_after_s"].get<double>();
+  std::cout << "corner: max jerk " << jerk_raw << " -> " << jerk << " rad/s^3, cycle time " << cycle_raw << " -> " << cycle << " s (programmed "
+            << raw.summary["machine"]["cycle_time_programmed_s"].get<double>() << " s), worst clearance " << raw.after.worst_clearance << " -> "
+            << smooth.after.worst_clearance << " mm\n";
+  EXPECT_LT(jerk, jerk_raw / 100);
+  EXPECT_LT(cycle, 0.9 * cycle_raw);
+  EXPECT_TRUE(smooth.after.collisions.empty()) << smooth.after.worst_clearance;
+  EXPECT_GT(smooth.after.worst_clearance, 0);
+  // The start and end poses stay (odd reflection at the ends).
+  EXPECT_NEAR(smooth.passes.front().samples.front().roll, raw.passes.front().samples.front().roll, 1e-12);
+  EXPECT_NEAR(smooth.passes.front().samples.back().roll, raw.passes.front().samples.back().roll, 1e-12);
 }
 
 // The passes are placed for the case's tool: CL = S + R n moves with the ball's radius.
