@@ -381,16 +381,12 @@ Eigen::MatrixXd ElasticProblem::solve() {
     const auto nodes = mesh_.element(e);
     for (std::size_t a = 0; a < nodes.size(); ++a) F.middleRows<3>(3 * nodes[a]) += removed * fe.middleRows<3>(3 * static_cast<Eigen::Index>(a));
   }
-  for (int d = 0; d < mesh_.dof_count(); ++d)
-    if (orphan_[static_cast<std::size_t>(d)]) F.row(d).setZero();
-  for (int d : fixed_dofs_) F.row(d).setZero();
+  zero_held_rows(F);
   Eigen::MatrixXd U = solve_by_group(F);
   if (block_current_) {
     // Held exactly, as the full path holds them: the block path leaves round-off on orphans whose
     // coupling it cancelled rather than removed.
-    for (int d = 0; d < mesh_.dof_count(); ++d)
-      if (orphan_[static_cast<std::size_t>(d)]) U.row(d).setZero();
-    for (int d : fixed_dofs_) U.row(d).setZero();
+    zero_held_rows(U);
   }
   if (!block_current_) {
     if (measure_full_residual_) {
@@ -467,15 +463,19 @@ Eigen::VectorXd ElasticProblem::block_row_residuals(const Eigen::MatrixXd& F, co
   return relative_norms(R, F);
 }
 
+void ElasticProblem::zero_held_rows(Eigen::MatrixXd& M) const {
+  for (int d = 0; d < mesh_.dof_count(); ++d)
+    if (orphan_[static_cast<std::size_t>(d)]) M.row(d).setZero();
+  for (int d : fixed_dofs_) M.row(d).setZero();
+}
+
 Eigen::VectorXd ElasticProblem::column_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U) {
   // After a block refactorization K is the anchor's K_ plus the changed elements' (a - a_anchor) K_e;
   // held rows are F's zeros.
   Eigen::MatrixXd R = F;
   R.noalias() -= K_.selfadjointView<Eigen::Lower>() * U;
   if (block_current_) subtract_changed_elements(U, [](int node) { return 3 * node; }, R);
-  for (int d = 0; d < mesh_.dof_count(); ++d)
-    if (orphan_[static_cast<std::size_t>(d)]) R.row(d).setZero();
-  for (int d : fixed_dofs_) R.row(d).setZero();
+  zero_held_rows(R);
   return relative_norms(R, F);
 }
 

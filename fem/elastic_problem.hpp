@@ -180,6 +180,8 @@ class ElasticProblem {
   std::vector<char> held_dofs();  // orphans (from the activity) and fixed dofs; updates orphan_
   // ||K u_p - f_p|| / ||f_p|| per column, for the current K.
   Eigen::VectorXd column_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U);
+  // Rows of dofs held now (orphans and fixed dofs) set to zero.
+  void zero_held_rows(Eigen::MatrixXd& M) const;
   // The same on the block's rows only (relative to the whole ||f_p||).
   Eigen::VectorXd block_row_residuals(const Eigen::MatrixXd& F, const Eigen::MatrixXd& U);
   // R -= sum over the elements changed since the anchor of (a - a_anchor) K_e u_e; a node's three

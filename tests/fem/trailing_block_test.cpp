@@ -204,6 +204,11 @@ struct MachinedPlate {
       stations.push_back(activity);
     }
   }
+  // The full path equilibrated on the intact plate, and the block path adopting that equilibrium.
+  void equilibrate(fem::ElasticProblem& full, fem::ElasticProblem& block) const {
+    full.equilibrate(fem::isostatic_dofs(mesh, shape, std::vector<char>(static_cast<std::size_t>(mesh.node_count()), 1)));
+    block.adopt_equilibrium(full);
+  }
   fem::ElasticProblem problem() const {
     fem::ElasticProblem p(mesh, shape, {71700, 0.33}, profiles);
     p.set_fixed_dofs(clamped);
@@ -234,8 +239,7 @@ void factorize_station(fem::ElasticProblem& block, const std::vector<double>& ac
 TEST(BlockRefactorization, GivesTheFullFactorizationsDisplacementsAsMaterialGoes) {
   const MachinedPlate plate;
   fem::ElasticProblem full = plate.problem(), block = plate.problem();
-  full.equilibrate(fem::isostatic_dofs(plate.mesh, plate.shape, std::vector<char>(static_cast<std::size_t>(plate.mesh.node_count()), 1)));
-  block.adopt_equilibrium(full);
+  plate.equilibrate(full, block);
   full.measure_full_residuals(true);
   for (std::size_t k = 0; k < plate.stations.size(); ++k) {
     full.set_activity(plate.stations[k]);
@@ -267,8 +271,7 @@ TEST(BlockRefactorization, AFailedResidualCheckSolvesAgainOnAFullFactorization) 
   // path's, bit for bit.
   const MachinedPlate plate;
   fem::ElasticProblem full = plate.problem(), block = plate.problem();
-  full.equilibrate(fem::isostatic_dofs(plate.mesh, plate.shape, std::vector<char>(static_cast<std::size_t>(plate.mesh.node_count()), 1)));
-  block.adopt_equilibrium(full);
+  plate.equilibrate(full, block);
   block.set_residual_bound(1e-300);
   for (std::size_t k = 0; k < plate.stations.size(); ++k) {
     full.set_activity(plate.stations[k]);
@@ -288,8 +291,7 @@ TEST(BlockRefactorization, AfterAFailedResidualCheckTheNextStationsRebuildTheirB
   // bound, start S from the anchor's again and keep their block solves.
   const MachinedPlate plate;
   fem::ElasticProblem full = plate.problem(), block = plate.problem();
-  full.equilibrate(fem::isostatic_dofs(plate.mesh, plate.shape, std::vector<char>(static_cast<std::size_t>(plate.mesh.node_count()), 1)));
-  block.adopt_equilibrium(full);
+  plate.equilibrate(full, block);
   for (std::size_t k = 0; k < plate.stations.size(); ++k) {
     full.set_activity(plate.stations[k]);
     full.assemble_and_factorize();
@@ -313,8 +315,7 @@ TEST(BlockRefactorization, AfterAFailedResidualCheckTheNextStationsRebuildTheirB
 TEST(BlockRefactorization, ARunThatChangesNothingFactorizesOnce) {
   const MachinedPlate plate;
   fem::ElasticProblem full = plate.problem(), block = plate.problem();
-  full.equilibrate(fem::isostatic_dofs(plate.mesh, plate.shape, std::vector<char>(static_cast<std::size_t>(plate.mesh.node_count()), 1)));
-  block.adopt_equilibrium(full);
+  plate.equilibrate(full, block);
   const std::vector<char> nothing(static_cast<std::size_t>(plate.mesh.element_count()), 0);
   full.set_activity(plate.stations[2]);
   full.assemble_and_factorize();
@@ -334,8 +335,7 @@ TEST(BlockRefactorization, ABlockTooLargeToPayFactorizesInFull) {
   // would cost far more than a full one. The run factorizes in full, bit for bit the full path.
   const MachinedPlate plate;
   fem::ElasticProblem full = plate.problem(), block = plate.problem();
-  full.equilibrate(fem::isostatic_dofs(plate.mesh, plate.shape, std::vector<char>(static_cast<std::size_t>(plate.mesh.node_count()), 1)));
-  block.adopt_equilibrium(full);
+  plate.equilibrate(full, block);
   const std::vector<char> everything(static_cast<std::size_t>(plate.mesh.element_count()), 1);
   for (std::size_t k = 0; k < plate.stations.size(); ++k) {
     full.set_activity(plate.stations[k]);
@@ -378,8 +378,7 @@ TEST(BlockRefactorization, StationsRefactorizeFromTheFirstDofTheyChangeAndMayCha
   EXPECT_EQ(plan.stations, 8);
 
   fem::ElasticProblem full = plate.problem(), block = plate.problem();
-  full.equilibrate(fem::isostatic_dofs(plate.mesh, plate.shape, std::vector<char>(static_cast<std::size_t>(plate.mesh.node_count()), 1)));
-  block.adopt_equilibrium(full);
+  plate.equilibrate(full, block);
   for (std::size_t k = 0; k < history.size(); ++k) {
     full.set_activity(history[k]);
     full.assemble_and_factorize();
