@@ -57,8 +57,12 @@ int main(int argc, char** argv) {
   exact.stepover = StepoverModel::curved;
   exact.accounting = Accounting::machine;
   const double exact_time = median_time(5, [&] { plan_finishing(problem.mesh, zones, setups, exact); });
-  std::printf("{\n  \"problem_setup_s\": %.4f,\n  \"path_generation\": {\"zones\": %d, \"passes\": %zu, \"fast_variant_ms\": %.2f, \"exact_variant_ms\": %.2f, \"goal_ms\": 50},\n",
-              setup_time, zones.count(), passes, 1e3 * fast, 1e3 * exact_time);
+  FinishingSettings run_out = exact;
+  run_out.run_out = 4 * run_out.tool.radius;  // drom finish's default
+  const double run_out_time = median_time(5, [&] { plan_finishing(problem.mesh, zones, setups, run_out); });
+  std::printf("{\n  \"problem_setup_s\": %.4f,\n  \"path_generation\": {\"zones\": %d, \"passes\": %zu, \"fast_variant_ms\": %.2f, \"exact_variant_ms\": %.2f, "
+              "\"exact_with_run_outs_ms\": %.2f, \"goal_ms\": 50},\n",
+              setup_time, zones.count(), passes, 1e3 * fast, 1e3 * exact_time, 1e3 * run_out_time);
   if (skip_optimisation) {
     std::printf("  \"optimisation\": null\n}\n");
     return 0;

@@ -209,6 +209,8 @@ ClOnMachine cl_to_machine_program(const ClProgram& cl, const Kinematics& kin) {
         for (int j = 3; j < kin.machine().joint_count(); ++j) travel += std::pow((b.end[j] - b.start[j]) * 180 / std::numbers::pi, 2);
         travel = std::sqrt(travel);
       }
+      // A repeated pose moves nothing: no block (a G1 to where the tool is has no feed to give it).
+      if (!(travel > 1e-9)) continue;
       b.programmed_duration = 60 * travel / p.feed;
     }
     out.program.blocks.push_back(b);

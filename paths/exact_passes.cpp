@@ -89,4 +89,56 @@ std::vector<SurfaceContact> exact_chain(const geometry::NurbsSurface& surface, c
   return out;
 }
 
+std::vector<SurfaceContact> trace_on(const geometry::NurbsSurface& surface, const Eigen::Vector3d& m, double level, Eigen::Vector2d uv, Eigen::Vector3d point,
+                                     Eigen::Vector3d direction, Eigen::Vector3d reference, const Eigen::Vector3d& axis, double margin, double max_length,
+                                     const std::function<bool(const TracePoint&)>& needed, double tolerance) {
+  std::vector<SurfaceContact> out;
+  const double span_u = surface.u_max() - surface.u_min(), span_v = surface.v_max() - surface.v_min();
+  double traced = 0, until = std::min(margin, max_length);
+  while (traced < max_length - 1e-9) {
+    const auto d = surface.derivatives(uv.x(), uv.y());
+    const auto g = geometry::local_geometry(d);
+    const double sign = g.normal.dot(reference) < 0 ? -1.0 : 1.0;
+    const SurfaceContact here{g.point, sign * g.normal, sign * g.curvature};
+    Eigen::Vector3d t = m.cross(here.normal);
+    if (t.norm() < 1e-9) break;
+    t.normalize();
+    if (t.dot(direction) < 0) t = -t;
+    if (needed && needed({uv, d, t, here.normal})) until = std::min(max_length, traced + margin);
+    if (traced >= until - 1e-9) break;
+    // The chord's sagitta kappa h^2 / 8 within the tolerance; at most 1 mm (the mesh's scale).
+    const double kappa = std::abs(t.dot(here.curvature * t));
+    const double h = std::min({kappa > 0 ? std::sqrt(8 * tolerance / kappa) : 1.0, 1.0, until - traced});
+    // Newton on (m . S = level, t . (S - point) = h).
+    Eigen::Vector2d w = uv;
+    bool converged = false;
+    for (int it = 0; it < 16; ++it) {
+      const auto q = surface.derivatives(w.x(), w.y());
+      const Eigen::Vector2d f(m.dot(q.point) - level, t.dot(q.point - point) - h);
+      if (f.norm() < 1e-11) {
+        converged = true;
+        break;
+      }
+      Eigen::Matrix2d j;
+      j << m.dot(q.du), m.dot(q.dv), t.dot(q.du), t.dot(q.dv);
+      const Eigen::Vector2d step = j.fullPivLu().solve(f);
+      if (!step.allFinite()) break;
+      w -= step;
+    }
+    // Stop where the trace is lost, or has wandered far off the patch (its extension is meant for a tool's width, not more).
+    const bool far_off = w.x() < surface.u_min() - 0.25 * span_u || w.x() > surface.u_max() + 0.25 * span_u || w.y() < surface.v_min() - 0.25 * span_v ||
+                         w.y() > surface.v_max() + 0.25 * span_v;
+    if (!converged || far_off) break;
+    const auto next = contact(surface, w.x(), w.y(), here.normal);
+    if (next.normal.dot(axis) < 0.1) break;
+    traced += (next.point - point).norm();
+    direction = next.point - point;
+    point = next.point;
+    reference = next.normal;
+    uv = w;
+    out.push_back(next);
+  }
+  return out;
+}
+
 }  // namespace drom::paths

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include <functional>
 #include <vector>
 
 namespace drom::paths {
@@ -29,5 +30,22 @@ struct SurfaceContact {
 // machined side.
 std::vector<SurfaceContact> exact_chain(const geometry::NurbsSurface& surface, const Eigen::Vector3d& plane_normal, double level,
                                         const std::vector<IsoCrossing>& chain, const std::vector<Eigen::Vector3d>& reference_normals, double chord_tolerance);
+
+// The plane's intersection with the surface traced on from a pass's end: from `point` (parameters
+// near `uv`) in `direction`, on while `needed` says so and `margin` mm of arc beyond (at least
+// `margin`, at most `max_length`), chords within `chord_tolerance`. Past the patch's boundary the surface is its own
+// boundary spans continued (a B-spline's polynomials are defined beyond its domain; that is the
+// patch's smoothest extension, and the one OpenCASCADE's GeomLib::ExtendSurfByLength approximates).
+// The trace stops early where the surface turns within about 6 degrees of parallel to `axis` (a
+// tool along it would no longer touch from above) or the intersection is lost. The end point
+// itself is not repeated.
+struct TracePoint {
+  Eigen::Vector2d uv;
+  geometry::SurfaceDerivatives derivatives;
+  Eigen::Vector3d tangent, normal;
+};
+std::vector<SurfaceContact> trace_on(const geometry::NurbsSurface& surface, const Eigen::Vector3d& plane_normal, double level, Eigen::Vector2d uv,
+                                     Eigen::Vector3d point, Eigen::Vector3d direction, Eigen::Vector3d reference_normal, const Eigen::Vector3d& axis,
+                                     double margin, double max_length, const std::function<bool(const TracePoint&)>& needed, double chord_tolerance);
 
 }  // namespace drom::paths

@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <numeric>
 
 namespace drom::paths {
@@ -48,6 +49,42 @@ Eigen::Vector3d cutter_location(const Eigen::Vector3d& cc, const Eigen::Vector3d
   return tip;
 }
 
+double one_pass_reach(const Tool& tool, const Eigen::Vector3d& n, const Eigen::Vector3d& axis, const Eigen::Vector3d& along, const Eigen::Vector3d& across,
+                      double curvature, double scallop) {
+  const double r = tool.corner_radius, ring = tool.kind == ToolKind::ball ? 0.0 : tool.radius - r;
+  // The cross-section frame at the contact: y across, z along the normal; the surface z = kappa y^2 / 2.
+  const Eigen::Vector3d y_axis = (across - across.dot(along) * along - across.dot(n) * n).normalized();
+  const Eigen::Vector3d centre = cutter_location(Eigen::Vector3d::Zero(), n, tool, axis) + r * axis;  // the tube circle's centre, from the contact
+  Eigen::Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+  // The tube circle projected along the pass: the disks' centres.
+  constexpr int kRing = 720;
+  std::array<Eigen::Vector2d, kRing> disks;
+  const int count = ring > 0 ? kRing : 1;
+  for (int k = 0; k < count; ++k) {
+    const double phi = 2 * std::numbers::pi * k / kRing;
+    const Eigen::Vector3d c = centre + ring * (std::cos(phi) * e1 + std::sin(phi) * e2);
+    disks[static_cast<std::size_t>(k)] = {y_axis.dot(c), n.dot(c)};
+  }
+  const auto gap = [&](double y) {
+    double lowest = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < count; ++k) {
+      const double dy = y - disks[static_cast<std::size_t>(k)].x();
+      if (std::abs(dy) < r) lowest = std::min(lowest, disks[static_cast<std::size_t>(k)].y() - std::sqrt(r * r - dy * dy));
+    }
+    return lowest - 0.5 * curvature * y * y;
+  };
+  // The gap grows from 0 at the contact; bracket its crossing of sh, then bisect. The ring is
+  // sampled every half degree: the envelope is then off by at most ring (1 - cos 0.25 deg), 0.03 um.
+  double lo = 0, hi = 0.05;
+  while (gap(hi) < scallop && hi < tool.radius) lo = hi, hi *= 1.5;
+  if (hi >= tool.radius) return tool.radius;
+  for (int it = 0; it < 40; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (gap(mid) < scallop ? lo : hi) = mid;
+  }
+  return lo;
+}
+
 namespace {
 
 struct Crossing {
@@ -72,6 +109,8 @@ class ZoneSlicer {
         hi_[k] = std::max(hi_[k], phi(c[static_cast<std::size_t>(q)]));
       }
     }
+    in_zone_.assign(static_cast<std::size_t>(mesh.cell_count()), 0);
+    for (const int c : cells) in_zone_[static_cast<std::size_t>(c)] = 1;
     order_.resize(cells.size());
     std::iota(order_.begin(), order_.end(), 0);
     std::sort(order_.begin(), order_.end(), [&](int x, int y) { return lo_[static_cast<std::size_t>(x)] < lo_[static_cast<std::size_t>(y)]; });
@@ -80,6 +119,8 @@ class ZoneSlicer {
     edge_segments_.resize(static_cast<std::size_t>(edges));
     edge_crossing_.resize(static_cast<std::size_t>(edges));
   }
+
+  bool holds(int cell) const { return in_zone_[static_cast<std::size_t>(cell)] != 0; }
 
   double min_level() const { return lo_.empty() ? 0 : *std::min_element(lo_.begin(), lo_.end()); }
   double max_level() const { return hi_.empty() ? 0 : *std::max_element(hi_.begin(), hi_.end()); }
@@ -206,10 +247,13 @@ class ZoneSlicer {
   std::vector<Crossing> edge_crossing_;
   std::vector<std::array<int, 2>> segments_;
   std::vector<bool> visited_;
+  std::vector<char> in_zone_;
 };
 
-// One plane's passes, with the step each contact point allows.
-std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, double level, const PassSettings& s) {
+// One plane's passes, with the step each contact point allows. With `reach_side` (-1 or +1), also
+// how far towards that side (plane units) each pass alone keeps the bound: for the zone's first and
+// last planes.
+std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, double level, const PassSettings& s, int reach_side = 0) {
   std::vector<Pass> passes;
   for (const auto& chain : slicer.slice(level)) {
     Pass p;
@@ -248,10 +292,17 @@ std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, doubl
         curvatures.push_back(c.curvature);
       }
     }
+    // The parameters of the chain's ends, where a run-out starts.
+    const auto end_uv = [&](const Crossing& x) {
+      const int row = mesh.cells_v + 1, ia = x.a / row, ja = x.a % row, ib = x.b / row, jb = x.b % row;
+      return Eigen::Vector2d(mesh.node_u(ia) + x.t * (mesh.node_u(ib) - mesh.node_u(ia)), mesh.node_v(ja) + x.t * (mesh.node_v(jb) - mesh.node_v(ja)));
+    };
+    Eigen::Vector2d uv_front = end_uv(chain.front()), uv_back = end_uv(chain.back());
     if ((p.cc.back() - p.cc.front()).dot(s.feed) < 0) {
       std::reverse(p.cc.begin(), p.cc.end());
       std::reverse(p.normals.begin(), p.normals.end());
       std::reverse(curvatures.begin(), curvatures.end());
+      std::swap(uv_front, uv_back);
     }
     p.worst_stepover = p.spacing = p.worst_effective_radius = std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < p.cc.size(); ++i) {
@@ -260,6 +311,81 @@ std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, doubl
       if (s.stepover != StepoverModel::seed) p.spacing = std::min(p.spacing, step.spacing);
       else if (step.effective_radius < p.worst_effective_radius * (1 - 1e-12)) p.spacing = step.spacing;  // ties: the first along the feed
       p.worst_effective_radius = std::min(p.worst_effective_radius, step.effective_radius);
+    }
+    if (reach_side != 0) {
+      const Eigen::Vector3d m = s.axis.cross(s.feed).normalized();
+      for (std::size_t i = 0; i < p.cc.size(); ++i) {
+        const Eigen::Vector3d& n = p.normals[i];
+        const Eigen::Vector3d along = i + 1 < p.cc.size() ? Eigen::Vector3d(p.cc[i + 1] - p.cc[i]) : Eigen::Vector3d(p.cc[i] - p.cc[i - 1]);
+        Eigen::Vector3d across = n.cross(along).normalized();
+        if (reach_side * m.dot(across) < 0) across = -across;
+        if (!across.allFinite() || along.norm() == 0) continue;
+        const double kappa = across.dot(curvatures[i] * across);
+        const double y = one_pass_reach(s.tool, n, s.axis, along.normalized(), across, kappa, s.scallop - (s.exact ? s.chord_tolerance : 0.0));
+        if (!std::isfinite(y)) continue;
+        p.reach = std::min(p.reach, std::max(1e-3 * y, y * std::abs(m.dot(across)) + reach_side * 0.5 * y * y * kappa * m.dot(n)));
+      }
+    }
+    // The run-outs, after the step: the bound is kept inside the zone, the run-out only carries the
+    // tool past its edge. A closed loop has no end to run out of.
+    const bool open = p.cc.size() >= 2 && (chain.front().a != chain.back().a || chain.front().b != chain.back().b);
+    if (s.run_out > 0 && open && mesh.surface) {
+      const Eigen::Vector3d m = s.axis.cross(s.feed).normalized();
+      const double tolerance = s.exact ? 0.5 * s.chord_tolerance : s.chord_tolerance;
+      // On past the run-out while the zone still lies beside the pass, within a plane step either
+      // side (an edge met obliquely): the neighbouring passes' material there needs this one too.
+      const geometry::NurbsSurface& surface = *mesh.surface;
+      const double plane_step = std::isfinite(p.spacing) ? p.spacing : p.worst_stepover;
+      const auto zone_beside = [&](const TracePoint& q) {
+        const Eigen::Vector3d across = q.normal.cross(q.tangent).normalized();
+        Eigen::Matrix<double, 3, 2> j;
+        j << q.derivatives.du, q.derivatives.dv;
+        const Eigen::Matrix2d metric = j.transpose() * j;
+        const double w = plane_step / std::max(0.2, std::abs(m.dot(across)));
+        for (const double f : {-1.0, -0.5, 0.0, 0.5, 1.0}) {
+          const Eigen::Vector2d at = q.uv + metric.ldlt().solve(j.transpose() * (f * w * across));
+          const double fu = (at.x() - surface.u_min()) / (surface.u_max() - surface.u_min()), fv = (at.y() - surface.v_min()) / (surface.v_max() - surface.v_min());
+          if (!(fu >= 0 && fu < 1 && fv >= 0 && fv < 1)) continue;
+          if (slicer.holds(mesh.cell(static_cast<int>(fu * mesh.cells_u), static_cast<int>(fv * mesh.cells_v)))) return true;
+        }
+        return false;
+      };
+      // On past the last place the zone lies beside by a step (the probes are half a step apart)
+      // and by R - r: a torus tilted on the ground cuts the material beside its contact with a part
+      // of its ring up to R - r ahead of or behind the contact (a ball: at the contact).
+      const double ring = s.tool.kind == ToolKind::ball ? 0.0 : s.tool.radius - s.tool.corner_radius;
+      const double margin = std::min(s.run_out, std::max(0.5, plane_step) + ring);
+      const auto back = trace_on(surface, m, level, uv_back, p.cc.back(), p.cc.back() - p.cc[p.cc.size() - 2], p.normals.back(), s.axis, margin, s.run_out,
+                                 zone_beside, tolerance);
+      const auto front = trace_on(surface, m, level, uv_front, p.cc.front(), p.cc.front() - p.cc[1], p.normals.front(), s.axis, margin, s.run_out,
+                                  zone_beside, tolerance);
+      // The tool cuts the material at the edge from up to `margin` past it: the step must keep the
+      // bound there too.
+      const auto splice = [&](const std::vector<SurfaceContact>& run, Eigen::Vector3d last, bool at_back) {
+        std::vector<Eigen::Vector3d> points, normals;
+        double along = 0;
+        for (const auto& c : run) {
+          along += (c.point - last).norm();
+          last = c.point;
+          points.push_back(c.point);
+          normals.push_back(c.normal);
+          if (along <= margin) {
+            const ContactStep step = contact_step(c.normal, c.curvature, s);
+            p.worst_stepover = std::min(p.worst_stepover, step.stepover);
+            if (s.stepover != StepoverModel::seed) p.spacing = std::min(p.spacing, step.spacing);
+          }
+        }
+        p.run_out_length += along;
+        if (at_back) {
+          p.cc.insert(p.cc.end(), points.begin(), points.end());
+          p.normals.insert(p.normals.end(), normals.begin(), normals.end());
+        } else {
+          p.cc.insert(p.cc.begin(), points.rbegin(), points.rend());
+          p.normals.insert(p.normals.begin(), normals.rbegin(), normals.rend());
+        }
+      };
+      splice(back, p.cc.back(), true);
+      splice(front, p.cc.front(), false);
     }
     passes.push_back(std::move(p));
   }
@@ -285,8 +411,18 @@ std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>&
   const double min_spacing = 1e-3 * flat_stepover(s.scallop, s.tool.corner_radius);
   const auto spacing_of = [&](const std::vector<Pass>& plane) { return std::max(min_spacing, plane_spacing(plane)); };
   // The first plane half a step inside the zone, the step measured just inside its edge.
-  std::vector<Pass> probe = passes_at(slicer, mesh, lo + std::min(1e-3, 0.5 * extent), s);
-  double level = probe.empty() ? lo + 0.5 * extent : std::min(lo + 0.5 * spacing_of(probe), lo + 0.5 * extent);
+  std::vector<Pass> probe = passes_at(slicer, mesh, lo + std::min(1e-3, 0.5 * extent), s, s.stepover == StepoverModel::seed ? 0 : -1);
+  double first_reach = probe.empty() ? 0.5 * extent : 0.5 * spacing_of(probe);
+  if (s.stepover != StepoverModel::seed)
+    for (const auto& p : probe) first_reach = std::min(first_reach, p.reach);
+  double level = std::min(lo + first_reach, lo + 0.5 * extent);
+  // The step the far edge allows, measured just inside it the same way (its own slicer: slicing
+  // near the top first would make every later slice walk every cell).
+  double last_reach = std::numeric_limits<double>::infinity();
+  if (s.stepover != StepoverModel::seed) {
+    ZoneSlicer far_slicer(mesh, cells, normal);
+    for (const auto& p : passes_at(far_slicer, mesh, hi - std::min(1e-3, 0.5 * extent), s, +1)) last_reach = std::min(last_reach, p.reach);
+  }
   std::vector<Pass> plane = passes_at(slicer, mesh, level, s);
   int index = 0;
   while (true) {
@@ -308,8 +444,12 @@ std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>&
       if (next >= hi) break;
       plane = passes_at(slicer, mesh, next, s);
     } else {
-      if (level + 0.5 * spacing >= hi) break;
-      next = std::min(next, hi - 0.5 * spacing);
+      // The last plane: within half a step of the far edge, the step the edge itself allows.
+      const double reach = std::min(0.5 * spacing, last_reach);
+      // (level = hi - reach need not give level + reach >= hi in floating point: the tolerance
+      // ends the zone there instead of planning that plane forever.)
+      if (!(level + reach < hi - 1e-9 * (1 + std::abs(hi)))) break;
+      next = std::min(next, hi - reach);
       plane = passes_at(slicer, mesh, next, s);
       // The scallop between two passes depends on both: where the next pass allows a smaller step,
       // its plane moves back (twice at most; the step barely changes over a fraction of a step).
@@ -320,6 +460,7 @@ std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>&
         plane = passes_at(slicer, mesh, next, s);
       }
     }
+    if (!(next > level)) break;  // no progress (a NaN step included): never plan a plane twice
     level = next;
     if (plane.empty()) break;
   }

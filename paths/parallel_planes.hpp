@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include <limits>
 #include <vector>
 
 namespace drom::paths {
@@ -38,6 +39,13 @@ struct PassSettings {
   // tolerance (mm); the curved model then keeps the scallop plus the chord deviation within sh.
   bool exact = false;
   double chord_tolerance = 2e-4;
+  // The longest run-out (mm of arc) past each end where a pass leaves the zone: onto the
+  // neighbouring zone, or past the patch's boundary onto the patch's own polynomials continued. A
+  // pass runs on while the zone still lies beside it within a plane step (an edge met obliquely:
+  // the material between two pass ends is otherwise reached only by the tools' end caps, and the
+  // scallop bound fails there, docs/finishing.md section 5), then one step more. 0: the passes stop
+  // at the zone's edge, as the seed's do.
+  double run_out = 0;
 };
 
 struct Pass {
@@ -47,6 +55,8 @@ struct Pass {
   double spacing = 0;           // the plane step this pass allows, mm
   double worst_effective_radius = 0;
   int plane = 0;                // index of the plane in the zone (several passes share a plane where it crosses the zone more than once)
+  double run_out_length = 0;    // mm of contact polyline added past the zone's edges (both ends)
+  double reach = std::numeric_limits<double>::infinity();  // for a zone's first and last planes: how far to the zone's edge it alone keeps sh (plane units)
 };
 
 // The passes over the zone's mesh cells, in machining order (planes in increasing level; several
@@ -60,6 +70,16 @@ struct ContactStep {
   double effective_radius = 0, stepover = 0, spacing = 0, curvature = 0, slope = 0, alpha = 0;
 };
 ContactStep contact_step(const Eigen::Vector3d& normal, const Eigen::Matrix3d& curvature, const PassSettings& settings);
+
+// How far (mm along the surface, on the side `across` points to) one pass alone keeps the scallop
+// within `scallop`: where the first and last planes of a zone go. Exact for both tools: the pass's
+// tool, swept along the pass tangent `along`, has for cross-section the lower envelope of disks of
+// radius r centred on the tube centre circle projected along the tangent (a ball: one disk of
+// radius R); the ground across is its osculating circle (`curvature`, > 0 concave). For a ball that is
+// half the two-pass step; for a tilted torus the two sides differ, and on the uphill side the half
+// step leaves up to 12 % more than sh.
+double one_pass_reach(const Tool& tool, const Eigen::Vector3d& normal, const Eigen::Vector3d& axis, const Eigen::Vector3d& along, const Eigen::Vector3d& across,
+                      double curvature, double scallop);
 
 // The tool-tip centre (the CL point) touching the surface at `cc` with the machined-side normal:
 // ball centre cc + R n, torus tube centre cc + r n moved (R - r) towards the axis; the tip is below it

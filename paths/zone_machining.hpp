@@ -24,6 +24,7 @@ struct FinishingSettings {
   bool zigzag = true;
   bool exact = false;              // the exact (Newton) variant of the passes; else the seed's fast iso-line one
   double chord_tolerance = 2e-4;   // mm, the exact variant's chords
+  double run_out = 0;              // mm, each pass continued past the zone's edges (PassSettings::run_out)
   Accounting accounting = Accounting::machine;
   // Times every pass, link and move (the seed's 5 m/min feed; rapids at 25 m/min).
   MoveTimer timer{Kinematics{}, Kinematics{25000.0 / 60, 6000, 40000}};

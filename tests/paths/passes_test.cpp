@@ -2,6 +2,8 @@
 // check 3) in the seed's step-over model and accounting, the exact variant against the fast one,
 // CL points, and the scallop the finished path leaves, simulated without the step-over model
 // (check 6).
+#include "paths/clustering.hpp"
+#include "paths/finish_optimizer.hpp"
 #include "paths/finishing_plan.hpp"
 #include "paths/pca.hpp"
 #include "paths/scallop_check.hpp"
@@ -25,7 +27,8 @@ drom::geometry::NurbsSurface inclined_plane() {
 }
 
 // One zone, one tool and direction; the seed's model and accounting unless told otherwise.
-FinishingPlan finish_whole(const drom::geometry::NurbsSurface& s, const Tool& tool, double azimuth, StepoverModel model = StepoverModel::seed, bool exact = false) {
+FinishingPlan finish_whole(const drom::geometry::NurbsSurface& s, const Tool& tool, double azimuth, StepoverModel model = StepoverModel::seed, bool exact = false,
+                           double run_out = 0) {
   const MachiningMesh mesh = build_machining_mesh(s, {}, 0.5, 80, 80);
   Zones zones;
   zones.zone.assign(6400, 0);
@@ -34,6 +37,7 @@ FinishingPlan finish_whole(const drom::geometry::NurbsSurface& s, const Tool& to
   fs.tool = tool;
   fs.stepover = model;
   fs.exact = exact;
+  fs.run_out = run_out;
   fs.accounting = Accounting::seed;
   ZoneSetup setup;
   setup.azimuth = azimuth;
@@ -133,6 +137,82 @@ TEST(ScallopBound, TheSeedsFlatStepoverExceedsItOnConvexGround) {
   RecordProperty("seed_max_scallop_mm", testing::PrintToString(seed));
   EXPECT_GT(flat, 0.0102);
   EXPECT_GT(seed, 0.013);
+}
+
+// The material left on strips along the patch's four edges, from the edge 1 % of the span inwards.
+ScallopCheck edge_strips(const drom::geometry::NurbsSurface& s, const FinishingPlan& plan, const Tool& tool, int along) {
+  ScallopCheck worst;
+  const auto keep = [&](const ScallopCheck& c) {
+    if (c.max_height > worst.max_height) {
+      worst.max_height = c.max_height;
+      worst.worst_uv = c.worst_uv;
+    }
+    worst.max_gouge = std::max(worst.max_gouge, c.max_gouge);
+    worst.points += c.points;
+  };
+  keep(check_scallop(s, plan.zones, tool, 0, 1, 0, 0.01, along, 3));
+  keep(check_scallop(s, plan.zones, tool, 0, 1, 0.99, 1, along, 3));
+  keep(check_scallop(s, plan.zones, tool, 0, 0.01, 0, 1, 3, along));
+  keep(check_scallop(s, plan.zones, tool, 0.99, 1, 0, 1, 3, along));
+  return worst;
+}
+
+TEST(ScallopBound, RunOutsKeepItAtTheEdges) {
+  // Passes stopped at an edge they meet obliquely leave the material between their ends to the
+  // tools' end caps; run on by the tool's radius past the edge, they keep sh up to it.
+  for (const bool rubio : {true, false}) {
+    const auto s = rubio ? drom::tests::rubio_surface() : drom::tests::choi_surface();
+    const PcaPlane p = pca_plane(sample_surface(s, {}, 80, 80).points);
+    for (const bool ball : {true, false}) {
+      const Tool tool = ball ? kBall : kTorus;
+      const double azimuth = ball ? p.principal_azimuth : p.steepest_azimuth;
+      const int along = ball ? 600 : 300;
+      const auto stopped = edge_strips(s, finish_whole(s, tool, azimuth, StepoverModel::curved, true, 0), tool, along);
+      const auto plan = finish_whole(s, tool, azimuth, StepoverModel::curved, true, 4 * tool.radius);
+      const auto run_on = edge_strips(s, plan, tool, along);
+      const std::string name = std::string(rubio ? "rubio_" : "choi_") + (ball ? "ball" : "torus");
+      RecordProperty(name + "_edges_stopped_mm", testing::PrintToString(stopped.max_height));
+      RecordProperty(name + "_edges_run_out_mm", testing::PrintToString(run_on.max_height));
+      EXPECT_EQ(run_on.points, 4 * 3 * along) << name << ": every edge point is reached";
+      EXPECT_LE(run_on.max_height, 0.01) << name;
+      EXPECT_LT(run_on.max_gouge, 2e-4) << name;
+      if (ball) {
+        EXPECT_GT(stopped.max_height, 0.012) << name << ": without run-outs the ends leave more than sh";
+      }
+    }
+  }
+}
+
+TEST(ScallopBound, RunOutsKeepItOnTheSeamsBetweenZones) {
+  // Three K-means zones, each along its own direction, as drom finish plans them (Choi: the torus
+  // along each zone's steepest slope; Rubio: the ball along each zone's principal direction). Where
+  // the passes of one zone stop at a seam they meet obliquely, the material between their ends is
+  // left to the end caps; run on into the neighbour, they keep sh over the whole surface.
+  for (const bool rubio : {true, false}) {
+    const auto s = rubio ? drom::tests::rubio_surface() : drom::tests::choi_surface();
+    const Tool tool = rubio ? kBall : kTorus;
+    const SurfaceSamples samples = sample_surface(s, {}, 80, 80);
+    const Zones zones = connected_zones(kmeans(samples, s, 3, ClusteringSettings{}), 80, 80);
+    std::vector<ZoneSetup> setups;
+    for (const auto& z : describe_zones(samples, zones)) setups.push_back(three_axis_setup(rubio ? z.plane.principal_azimuth : z.steepest_azimuth));
+    const MachiningMesh mesh = build_machining_mesh(s, {}, 0.5, 80, 80);
+    FinishingSettings fs;
+    fs.tool = tool;
+    fs.exact = true;
+    const auto worst = [&](double run_out) {
+      fs.run_out = run_out;
+      return check_scallop(s, plan_finishing(mesh, zones, setups, fs).zones, tool, 0, 1, 0, 1, 40, 40);
+    };
+    const auto stopped = worst(0), run_on = worst(4 * tool.radius);
+    const std::string name = rubio ? "rubio_ball" : "choi_torus";
+    RecordProperty(name + "_zones", zones.count());
+    RecordProperty(name + "_stopped_mm", testing::PrintToString(stopped.max_height));
+    RecordProperty(name + "_run_out_mm", testing::PrintToString(run_on.max_height));
+    EXPECT_GT(stopped.max_height, 0.02) << name << ": stopped at the seams and edges, the ends leave twice sh";
+    EXPECT_EQ(run_on.points, 1600) << name;
+    EXPECT_LE(run_on.max_height, 0.01) << name << " at " << run_on.worst_uv.transpose();
+    EXPECT_LT(run_on.max_gouge, 2e-4) << name;
+  }
 }
 
 }  // namespace
