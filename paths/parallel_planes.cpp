@@ -1,6 +1,7 @@
 #include "paths/parallel_planes.hpp"
 
 #include "paths/exact_passes.hpp"
+#include "paths/swept_profile.hpp"
 
 #include <Eigen/Geometry>
 
@@ -28,8 +29,17 @@ ContactStep contact_step(const Eigen::Vector3d& n, const Eigen::Matrix3d& curvat
   if (m.dot(across) < 0) across = -across;  // towards the next plane
   c.curvature = across.dot(curvature * across);
   const double scallop = s.exact && s.stepover == StepoverModel::curved ? s.scallop - s.chord_tolerance : s.scallop;
-  const double step = s.stepover == StepoverModel::curved ? curved_stepover(scallop, c.effective_radius, c.curvature)
-                                                          : flat_stepover(s.scallop, c.effective_radius);
+  double step = s.stepover == StepoverModel::curved ? curved_stepover(scallop, c.effective_radius, c.curvature) : flat_stepover(s.scallop, c.effective_radius);
+  if (s.stepover == StepoverModel::curved && s.tool.kind == ToolKind::torus && step > 0) {
+    // The torus's swept profile instead of eq. 1.5's circle on level ground (the sum of its two
+    // sides' reaches), bent by the ground as eq. 1.5's circle would be.
+    const SweptProfileTable& table = s.profile ? *s.profile : swept_profile_table(s.tool, scallop);
+    const Eigen::Vector3d feed = (s.feed - s.feed.dot(a) * a).normalized();
+    const SideReach reach = table.reach(c.slope, std::atan2(n.dot(m), n.dot(feed)));
+    const double level_ground = flat_stepover(scallop, c.effective_radius);
+    if (std::isfinite(level_ground) && level_ground > 0) step *= (reach.minus + reach.plus) / level_ground;
+    else step = reach.minus + reach.plus;
+  }
   c.stepover = std::min(step, level_ground_stepover(s.tool, s.scallop));
   // The plane step that moves the contact `stepover` along the surface: an arc w from p ends at
   // p + w t + (w^2 / 2) kappa n, so the step is w (m . t) + (w^2 / 2) kappa (m . n). The seed keeps
@@ -47,42 +57,6 @@ Eigen::Vector3d cutter_location(const Eigen::Vector3d& cc, const Eigen::Vector3d
   const Eigen::Vector3d radial = n - n.dot(axis) * axis;
   if (radial.norm() > 1e-12) tip += (tool.radius - r) * radial.normalized();
   return tip;
-}
-
-double one_pass_reach(const Tool& tool, const Eigen::Vector3d& n, const Eigen::Vector3d& axis, const Eigen::Vector3d& along, const Eigen::Vector3d& across,
-                      double curvature, double scallop) {
-  const double r = tool.corner_radius, ring = tool.kind == ToolKind::ball ? 0.0 : tool.radius - r;
-  // The cross-section frame at the contact: y across, z along the normal; the surface z = kappa y^2 / 2.
-  const Eigen::Vector3d y_axis = (across - across.dot(along) * along - across.dot(n) * n).normalized();
-  const Eigen::Vector3d centre = cutter_location(Eigen::Vector3d::Zero(), n, tool, axis) + r * axis;  // the tube circle's centre, from the contact
-  Eigen::Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
-  // The tube circle projected along the pass: the disks' centres.
-  constexpr int kRing = 720;
-  std::array<Eigen::Vector2d, kRing> disks;
-  const int count = ring > 0 ? kRing : 1;
-  for (int k = 0; k < count; ++k) {
-    const double phi = 2 * std::numbers::pi * k / kRing;
-    const Eigen::Vector3d c = centre + ring * (std::cos(phi) * e1 + std::sin(phi) * e2);
-    disks[static_cast<std::size_t>(k)] = {y_axis.dot(c), n.dot(c)};
-  }
-  const auto gap = [&](double y) {
-    double lowest = std::numeric_limits<double>::infinity();
-    for (int k = 0; k < count; ++k) {
-      const double dy = y - disks[static_cast<std::size_t>(k)].x();
-      if (std::abs(dy) < r) lowest = std::min(lowest, disks[static_cast<std::size_t>(k)].y() - std::sqrt(r * r - dy * dy));
-    }
-    return lowest - 0.5 * curvature * y * y;
-  };
-  // The gap grows from 0 at the contact; bracket its crossing of sh, then bisect. The ring is
-  // sampled every half degree: the envelope is then off by at most ring (1 - cos 0.25 deg), 0.03 um.
-  double lo = 0, hi = 0.05;
-  while (gap(hi) < scallop && hi < tool.radius) lo = hi, hi *= 1.5;
-  if (hi >= tool.radius) return tool.radius;
-  for (int it = 0; it < 40; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (gap(mid) < scallop ? lo : hi) = mid;
-  }
-  return lo;
 }
 
 namespace {
@@ -401,14 +375,17 @@ double plane_spacing(const std::vector<Pass>& plane) {
 
 }  // namespace
 
-std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>& cells, const PassSettings& s) {
+std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>& cells, const PassSettings& settings) {
   std::vector<Pass> result;
   if (cells.empty()) return result;
+  PassSettings s = settings;
+  if (s.stepover == StepoverModel::curved && s.tool.kind == ToolKind::torus && !s.profile)
+    s.profile = &swept_profile_table(s.tool, s.exact ? s.scallop - s.chord_tolerance : s.scallop);
   const Eigen::Vector3d normal = s.axis.cross(s.feed).normalized();
   ZoneSlicer slicer(mesh, cells, normal);
   const double lo = slicer.min_level(), hi = slicer.max_level(), extent = hi - lo;
   // A floor on the plane step, so a point where no step keeps the bound (the tool gouges) cannot stall the planner.
-  const double min_spacing = 1e-3 * flat_stepover(s.scallop, s.tool.corner_radius);
+  const double min_spacing = 0.05 * flat_stepover(s.scallop, s.tool.corner_radius);
   const auto spacing_of = [&](const std::vector<Pass>& plane) { return std::max(min_spacing, plane_spacing(plane)); };
   // The first plane half a step inside the zone, the step measured just inside its edge.
   std::vector<Pass> probe = passes_at(slicer, mesh, lo + std::min(1e-3, 0.5 * extent), s, s.stepover == StepoverModel::seed ? 0 : -1);

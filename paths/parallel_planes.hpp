@@ -5,6 +5,7 @@
 // intersects the planes with the machining mesh's iso-parametric lines (the seed's method for every
 // result); the exact variant (exact_passes.hpp) puts the points on the surface by Newton's method.
 #include "paths/machining_mesh.hpp"
+#include "paths/swept_profile.hpp"
 #include "paths/tool.hpp"
 
 #include <Eigen/Core>
@@ -46,6 +47,8 @@ struct PassSettings {
   // scallop bound fails there, docs/finishing.md section 5), then one step more. 0: the passes stop
   // at the zone's edge, as the seed's do.
   double run_out = 0;
+  // The curved model's torus profile (swept_profile.hpp); plan_passes fills it in.
+  const SweptProfileTable* profile = nullptr;
 };
 
 struct Pass {
@@ -70,16 +73,6 @@ struct ContactStep {
   double effective_radius = 0, stepover = 0, spacing = 0, curvature = 0, slope = 0, alpha = 0;
 };
 ContactStep contact_step(const Eigen::Vector3d& normal, const Eigen::Matrix3d& curvature, const PassSettings& settings);
-
-// How far (mm along the surface, on the side `across` points to) one pass alone keeps the scallop
-// within `scallop`: where the first and last planes of a zone go. Exact for both tools: the pass's
-// tool, swept along the pass tangent `along`, has for cross-section the lower envelope of disks of
-// radius r centred on the tube centre circle projected along the tangent (a ball: one disk of
-// radius R); the ground across is its osculating circle (`curvature`, > 0 concave). For a ball that is
-// half the two-pass step; for a tilted torus the two sides differ, and on the uphill side the half
-// step leaves up to 12 % more than sh.
-double one_pass_reach(const Tool& tool, const Eigen::Vector3d& normal, const Eigen::Vector3d& axis, const Eigen::Vector3d& along, const Eigen::Vector3d& across,
-                      double curvature, double scallop);
 
 // The tool-tip centre (the CL point) touching the surface at `cc` with the machined-side normal:
 // ball centre cc + R n, torus tube centre cc + r n moved (R - r) towards the axis; the tip is below it

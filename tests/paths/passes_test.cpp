@@ -8,8 +8,10 @@
 #include "paths/pca.hpp"
 #include "paths/scallop_check.hpp"
 #include "paths/surface_samples.hpp"
+#include "paths/swept_profile.hpp"
 #include "tests/geometry/test_surfaces.hpp"
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -212,6 +214,64 @@ TEST(ScallopBound, RunOutsKeepItOnTheSeamsBetweenZones) {
     EXPECT_EQ(run_on.points, 1600) << name;
     EXPECT_LE(run_on.max_height, 0.01) << name << " at " << run_on.worst_uv.transpose();
     EXPECT_LT(run_on.max_gouge, 2e-4) << name;
+  }
+}
+
+TEST(OnePassReach, MatchesTheSweptToolOnAnInclinedPlane) {
+  // One straight pass over a plane sloped 30 deg: at the reach either side, the simulated sweep
+  // (envelope_heights, which knows nothing of the reach) leaves exactly sh. A ball's two sides are
+  // eq. 2.3's half step; a torus fed across the slope is lopsided, and the half of the eq. 1.5 step
+  // is not what either side keeps.
+  const double slope = 30 * kDeg, sh = 0.01;
+  const Eigen::Vector3d n(0, -std::sin(slope), std::cos(slope)), z = Eigen::Vector3d::UnitZ();
+  for (const double azimuth : {0.0, 40 * kDeg, 90 * kDeg}) {
+    // The feed's horizontal direction, put in the plane.
+    Eigen::Vector3d along(std::cos(azimuth), std::sin(azimuth), 0);
+    along = (along - along.dot(n) * n).normalized();
+    const Eigen::Vector3d across = n.cross(along);
+    for (const Tool& tool : {kBall, kTorus}) {
+      const Eigen::Vector3d tip0 = cutter_location(-60 * along, n, tool, z), tip1 = cutter_location(60 * along, n, tool, z);
+      double sides[2];
+      for (const int side : {-1, 1}) {
+        const double y = one_pass_reach(tool, n, z, along, side * across, 0.0, sh);
+        sides[side > 0] = y;
+        const auto h = envelope_heights({side * y * across}, {n}, {{tip0, tip1, z}}, tool, 0.05);
+        EXPECT_NEAR(h[0], sh, 2e-6) << tool.name() << " azimuth " << azimuth / kDeg << " side " << side;
+      }
+      if (tool.kind == ToolKind::ball) {
+        EXPECT_NEAR(sides[0], 0.5 * flat_stepover(sh, 5), 1e-6);
+        EXPECT_NEAR(sides[1], 0.5 * flat_stepover(sh, 5), 1e-6);
+      } else if (azimuth == 40 * kDeg) {
+        // Fed obliquely to the slope, the torus is lopsided, and eq. 1.5's half step reaches past
+        // both sides: laid out by it, the passes leave more than sh.
+        const double half = 0.5 * flat_stepover(sh, effective_radius(tool, slope, std::numbers::pi / 2 - azimuth));
+        EXPECT_GT(std::abs(sides[1] - sides[0]), 0.03 * std::min(sides[0], sides[1]));
+        EXPECT_GT(half, std::max(sides[0], sides[1]));
+        const int worse = sides[0] < sides[1] ? -1 : 1;
+        const double left = envelope_heights({worse * half * across}, {n}, {{tip0, tip1, z}}, tool, 0.05)[0];
+        RecordProperty("torus_oblique_sides_mm", testing::PrintToString(std::vector<double>{sides[0], sides[1], half}));
+        RecordProperty("torus_oblique_eq15_half_step_leaves_mm", testing::PrintToString(left));
+        EXPECT_GT(left, 1.1 * sh);
+      }
+    }
+  }
+}
+
+TEST(ScallopBound, TheTorusKeepsItFedObliquelyToTheSlope) {
+  // The optimiser turns each zone's feed away from its steepest slope; there eq. 1.5's circle is
+  // too wide a step (Choi 40 deg off: 0.0101 mm; Rubio 60 deg off: 0.0104 mm on this grid). The
+  // swept profile's reaches keep sh.
+  for (const bool rubio : {true, false}) {
+    const auto s = rubio ? drom::tests::rubio_surface() : drom::tests::choi_surface();
+    const PcaPlane p = pca_plane(sample_surface(s, {}, 80, 80).points);
+    const double off = (rubio ? 60 : 40) * kDeg;
+    const auto plan = finish_whole(s, kTorus, p.steepest_azimuth + off, StepoverModel::curved, true, 20);
+    const auto c = check_scallop(s, plan.zones, kTorus, 0.05, 0.95, 0.05, 0.95, 90, 90);
+    const std::string name = rubio ? "rubio" : "choi";
+    RecordProperty(name + "_max_scallop_mm", testing::PrintToString(c.max_height));
+    EXPECT_LE(c.max_height, 0.01) << name << " at " << c.worst_uv.transpose();
+    EXPECT_GT(c.max_height, 0.009) << name << ": the bound is used";
+    EXPECT_LT(c.max_gouge, 2e-4) << name;
   }
 }
 
