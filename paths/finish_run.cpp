@@ -300,6 +300,10 @@ json run_finish(const FinishCase& c, const FinishRunOptions& o) {
   s["time_s"] = {{"total", plan.time()}, {"passes", plan.pass_time()}, {"links", plan.link_time()}, {"retracts", plan.retract_time()}, {"between_zones", plan.move_time}};
   s["length_mm"] = {{"total", plan.length()}, {"passes", plan.pass_length()}, {"links", plan.link_length()}};
   s["passes"] = plan.pass_count();
+  double run_outs = 0;
+  for (const auto& z : plan.zones)
+    for (const auto& p : z.passes) run_outs += p.run_out_length;
+  s["run_out"] = {{"longest_mm", settings.run_out}, {"contact_length_mm", run_outs}};
   s["scallop_check"] = {{"points", check.points}, {"max_height_mm", check.max_height}, {"max_gouge_mm", check.max_gouge}, {"worst_uv", {check.worst_uv.x(), check.worst_uv.y()}}, {"grid", "40 x 40 over the surface"}};
   for (const auto& k : optima)
     s["optimization"].push_back({{"clusters", k.clusters}, {"zones", k.zones.count()}, {"f0_s", k.start_time}, {"f_star_s", k.best_time}, {"gain", k.gain()},
