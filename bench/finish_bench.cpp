@@ -58,7 +58,7 @@ int main(int argc, char** argv) {
   exact.accounting = Accounting::machine;
   const double exact_time = median_time(5, [&] { plan_finishing(problem.mesh, zones, setups, exact); });
   FinishingSettings run_out = exact;
-  run_out.run_out = 4 * run_out.tool.radius;  // drom finish's default
+  run_out.run_out = 20 * run_out.tool.radius;  // drom finish's default
   const double run_out_time = median_time(5, [&] { plan_finishing(problem.mesh, zones, setups, run_out); });
   std::printf("{\n  \"problem_setup_s\": %.4f,\n  \"path_generation\": {\"zones\": %d, \"passes\": %zu, \"fast_variant_ms\": %.2f, \"exact_variant_ms\": %.2f, "
               "\"exact_with_run_outs_ms\": %.2f, \"goal_ms\": 50},\n",

@@ -58,7 +58,7 @@ FinishCase load_finish_case(const std::filesystem::path& path, const std::vector
   c.settings.chord_tolerance = r.real("finish.chord_tolerance", Range::positive(), 2e-4);
   if (c.settings.exact && c.settings.chord_tolerance >= 0.5 * c.settings.scallop) r.fail("finish.chord_tolerance", "must be below half of finish.scallop");
   // A CAM system runs its passes out past the edge of what it finishes; the seed's passes stop there.
-  c.settings.run_out = r.real("finish.run_out", Range::non_negative(), c.settings.stepover == StepoverModel::seed ? 0.0 : 4 * radius);
+  c.settings.run_out = r.real("finish.run_out", Range::non_negative(), c.settings.stepover == StepoverModel::seed ? 0.0 : 20 * radius);
   c.settings.zigzag = r.choice("finish.strategy", {"zigzag", "one_way"}, "zigzag") == "zigzag";
   c.settings.accounting = r.choice("finish.accounting", {"machine", "seed"}, "machine") == "machine" ? Accounting::machine : Accounting::seed;
   const std::string setup = r.choice("finish.setup", {"3-axis", "3+2", "heuristic"}, "3-axis");
