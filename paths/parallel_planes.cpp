@@ -385,7 +385,9 @@ std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>&
   ZoneSlicer slicer(mesh, cells, normal);
   const double lo = slicer.min_level(), hi = slicer.max_level(), extent = hi - lo;
   // A floor on the plane step, so a point where no step keeps the bound (the tool gouges) cannot stall the planner.
-  const double min_spacing = 0.05 * flat_stepover(s.scallop, s.tool.corner_radius);
+  // (5 % of the corner's step: a zone the tool gouges all over would otherwise be planned in tens
+  // of thousands of planes; the seed's model keeps its own floor, which its tables were matched with.)
+  const double min_spacing = (s.stepover == StepoverModel::seed ? 1e-3 : 0.05) * flat_stepover(s.scallop, s.tool.corner_radius);
   const auto spacing_of = [&](const std::vector<Pass>& plane) { return std::max(min_spacing, plane_spacing(plane)); };
   // The first plane half a step inside the zone, the step measured just inside its edge.
   std::vector<Pass> probe = passes_at(slicer, mesh, lo + std::min(1e-3, 0.5 * extent), s, s.stepover == StepoverModel::seed ? 0 : -1);
