@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace drom::paths {
 
@@ -93,11 +94,19 @@ std::vector<SurfaceContact> trace_on(const geometry::NurbsSurface& surface, cons
                                      Eigen::Vector3d direction, Eigen::Vector3d reference, const Eigen::Vector3d& axis, double margin, double max_length,
                                      const std::function<bool(const TracePoint&)>& needed, double tolerance) {
   std::vector<SurfaceContact> out;
+  if (!(direction.norm() > 0)) return out;  // no way out to follow
   const double span_u = surface.u_max() - surface.u_min(), span_v = surface.v_max() - surface.v_min();
   double traced = 0, until = std::min(margin, max_length);
   while (traced < max_length - 1e-9) {
     const auto d = surface.derivatives(uv.x(), uv.y());
-    const auto g = geometry::local_geometry(d);
+    // Past the patch its continued polynomials can fold (or a rational patch's weights vanish):
+    // the trace ends where the surface has no normal.
+    geometry::LocalGeometry g;
+    try {
+      g = geometry::local_geometry(d);
+    } catch (const std::domain_error&) {
+      break;
+    }
     const double sign = g.normal.dot(reference) < 0 ? -1.0 : 1.0;
     const SurfaceContact here{g.point, sign * g.normal, sign * g.curvature};
     Eigen::Vector3d t = m.cross(here.normal);
@@ -129,7 +138,12 @@ std::vector<SurfaceContact> trace_on(const geometry::NurbsSurface& surface, cons
     const bool far_off = w.x() < surface.u_min() - 0.25 * span_u || w.x() > surface.u_max() + 0.25 * span_u || w.y() < surface.v_min() - 0.25 * span_v ||
                          w.y() > surface.v_max() + 0.25 * span_v;
     if (!converged || far_off) break;
-    const auto next = contact(surface, w.x(), w.y(), here.normal);
+    SurfaceContact next;
+    try {
+      next = contact(surface, w.x(), w.y(), here.normal);
+    } catch (const std::domain_error&) {
+      break;
+    }
     if (next.normal.dot(axis) < 0.1) break;
     traced += (next.point - point).norm();
     direction = next.point - point;

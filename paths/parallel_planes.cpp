@@ -288,7 +288,10 @@ std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, doubl
     }
     if (reach_side != 0) {
       const Eigen::Vector3d m = s.axis.cross(s.feed).normalized();
-      for (std::size_t i = 0; i < p.cc.size(); ++i) {
+      // At most about 16 points of a probe pass: a torus's reach costs some 0.1 ms, and a probe
+      // along an edge parallel to the planes spans the whole edge.
+      const std::size_t stride = std::max<std::size_t>(1, p.cc.size() / 16);
+      for (std::size_t i = 0; i < p.cc.size(); i += stride) {
         const Eigen::Vector3d& n = p.normals[i];
         const Eigen::Vector3d along = i + 1 < p.cc.size() ? Eigen::Vector3d(p.cc[i + 1] - p.cc[i]) : Eigen::Vector3d(p.cc[i] - p.cc[i - 1]);
         Eigen::Vector3d across = n.cross(along).normalized();
@@ -300,71 +303,96 @@ std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, doubl
         p.reach = std::min(p.reach, std::max(1e-3 * y, y * std::abs(m.dot(across)) + reach_side * 0.5 * y * y * kappa * m.dot(n)));
       }
     }
-    // The run-outs, after the step: the bound is kept inside the zone, the run-out only carries the
-    // tool past its edge. A closed loop has no end to run out of.
-    const bool open = p.cc.size() >= 2 && (chain.front().a != chain.back().a || chain.front().b != chain.back().b);
-    if (s.run_out > 0 && open && mesh.surface) {
-      const Eigen::Vector3d m = s.axis.cross(s.feed).normalized();
-      const double tolerance = s.exact ? 0.5 * s.chord_tolerance : s.chord_tolerance;
-      // On past the run-out while the zone still lies beside the pass, within a plane step either
-      // side (an edge met obliquely): the neighbouring passes' material there needs this one too.
-      const geometry::NurbsSurface& surface = *mesh.surface;
-      const double plane_step = std::isfinite(p.spacing) ? p.spacing : p.worst_stepover;
-      const auto zone_beside = [&](const TracePoint& q) {
-        const Eigen::Vector3d across = q.normal.cross(q.tangent).normalized();
-        Eigen::Matrix<double, 3, 2> j;
-        j << q.derivatives.du, q.derivatives.dv;
-        const Eigen::Matrix2d metric = j.transpose() * j;
-        const double w = plane_step / std::max(0.2, std::abs(m.dot(across)));
-        for (const double f : {-1.0, -0.5, 0.0, 0.5, 1.0}) {
-          const Eigen::Vector2d at = q.uv + metric.ldlt().solve(j.transpose() * (f * w * across));
-          const double fu = (at.x() - surface.u_min()) / (surface.u_max() - surface.u_min()), fv = (at.y() - surface.v_min()) / (surface.v_max() - surface.v_min());
-          if (!(fu >= 0 && fu < 1 && fv >= 0 && fv < 1)) continue;
-          if (slicer.holds(mesh.cell(static_cast<int>(fu * mesh.cells_u), static_cast<int>(fv * mesh.cells_v)))) return true;
-        }
-        return false;
-      };
-      // On past the last place the zone lies beside by a step (the probes are half a step apart)
-      // and by R - r: a torus tilted on the ground cuts the material beside its contact with a part
-      // of its ring up to R - r ahead of or behind the contact (a ball: at the contact).
-      const double ring = s.tool.kind == ToolKind::ball ? 0.0 : s.tool.radius - s.tool.corner_radius;
-      const double margin = std::min(s.run_out, std::max(0.5, plane_step) + ring);
-      const auto back = trace_on(surface, m, level, uv_back, p.cc.back(), p.cc.back() - p.cc[p.cc.size() - 2], p.normals.back(), s.axis, margin, s.run_out,
-                                 zone_beside, tolerance);
-      const auto front = trace_on(surface, m, level, uv_front, p.cc.front(), p.cc.front() - p.cc[1], p.normals.front(), s.axis, margin, s.run_out,
-                                  zone_beside, tolerance);
-      // The tool cuts the material at the edge from up to `margin` past it: the step must keep the
-      // bound there too.
-      const auto splice = [&](const std::vector<SurfaceContact>& run, Eigen::Vector3d last, bool at_back) {
-        std::vector<Eigen::Vector3d> points, normals;
-        double along = 0;
-        for (const auto& c : run) {
-          along += (c.point - last).norm();
-          last = c.point;
-          points.push_back(c.point);
-          normals.push_back(c.normal);
-          if (along <= margin) {
-            const ContactStep step = contact_step(c.normal, c.curvature, s);
-            p.worst_stepover = std::min(p.worst_stepover, step.stepover);
-            if (s.stepover != StepoverModel::seed) p.spacing = std::min(p.spacing, step.spacing);
-          }
-        }
-        p.run_out_length += along;
-        if (at_back) {
-          p.cc.insert(p.cc.end(), points.begin(), points.end());
-          p.normals.insert(p.normals.end(), normals.begin(), normals.end());
-        } else {
-          p.cc.insert(p.cc.begin(), points.rbegin(), points.rend());
-          p.normals.insert(p.normals.begin(), normals.rbegin(), normals.rend());
-        }
-      };
-      splice(back, p.cc.back(), true);
-      splice(front, p.cc.front(), false);
-    }
+    // A closed loop has no end to run out of.
+    p.open = p.cc.size() >= 2 && (chain.front().a != chain.back().a || chain.front().b != chain.back().b);
+    p.uv_front = uv_front;
+    p.uv_back = uv_back;
     passes.push_back(std::move(p));
   }
   std::sort(passes.begin(), passes.end(), [&](const Pass& x, const Pass& y) { return x.cc.front().dot(s.feed) < y.cc.front().dot(s.feed); });
   return passes;
+}
+
+// The pass run on past both its ends (PassSettings::run_out), once its plane is placed: the step
+// keeps the bound inside the zone, and also over the first `margin` of each run-out, where the tool
+// cuts the edge's material from.
+void add_run_outs(Pass& p, const ZoneSlicer& slicer, const MachiningMesh& mesh, const PassSettings& s) {
+  if (!(s.run_out > 0) || !p.open || !mesh.surface) return;
+  const double level = p.level;
+  const Eigen::Vector3d m = s.axis.cross(s.feed).normalized();
+  const double tolerance = s.exact ? 0.5 * s.chord_tolerance : s.chord_tolerance;
+  // On past the run-out while the zone still lies beside the pass, within a plane step either
+  // side (an edge met obliquely): the neighbouring passes' material there needs this one too.
+  const geometry::NurbsSurface& surface = *mesh.surface;
+  const double plane_step = std::isfinite(p.spacing) ? p.spacing : p.worst_stepover;
+  // Once the trace has left the zone and comes back into it, it is on another pass of the same
+  // plane (a zone crossed twice): no further than the margin along that one.
+  bool left = false, back_in = false;
+  const auto zone_beside = [&](const TracePoint& q) {
+    const Eigen::Vector3d across = q.normal.cross(q.tangent).normalized();
+    Eigen::Matrix<double, 3, 2> j;
+    j << q.derivatives.du, q.derivatives.dv;
+    const auto metric = (j.transpose() * j).eval().ldlt();
+    const double w = plane_step / std::max(0.2, std::abs(m.dot(across)));
+    const auto in_zone = [&](double f) {
+      const Eigen::Vector2d at = q.uv + metric.solve(j.transpose() * (f * w * across));
+      const double fu = (at.x() - surface.u_min()) / (surface.u_max() - surface.u_min()), fv = (at.y() - surface.v_min()) / (surface.v_max() - surface.v_min());
+      return fu >= 0 && fu < 1 && fv >= 0 && fv < 1 && slicer.holds(mesh.cell(static_cast<int>(fu * mesh.cells_u), static_cast<int>(fv * mesh.cells_v)));
+    };
+    const bool here = in_zone(0);
+    if (!here) left = true;
+    else if (left) back_in = true;
+    if (back_in) return false;
+    if (here) return true;
+    for (const double f : {-1.0, -0.5, 0.5, 1.0})
+      if (in_zone(f)) return true;
+    return false;
+  };
+  // On past the last place the zone lies beside by a step (the probes are half a step apart)
+  // and by R - r: a torus tilted on the ground cuts the material beside its contact with a part
+  // of its ring up to R - r ahead of or behind the contact (a ball: at the contact).
+  const double ring = s.tool.kind == ToolKind::ball ? 0.0 : s.tool.radius - s.tool.corner_radius;
+  const double margin = std::min(s.run_out, std::max(0.5, plane_step) + ring);
+  // The direction a pass leaves by: from the last point apart from its end (a chain can repeat a point).
+  const auto leaving = [&](bool at_back) {
+    const std::size_t count = p.cc.size();
+    const Eigen::Vector3d& end = at_back ? p.cc.back() : p.cc.front();
+    for (std::size_t k = 1; k < count; ++k) {
+      const Eigen::Vector3d d = end - (at_back ? p.cc[count - 1 - k] : p.cc[k]);
+      if (d.norm() > 1e-9) return d;
+    }
+    return Eigen::Vector3d(Eigen::Vector3d::Zero());
+  };
+  const auto back = trace_on(surface, m, level, p.uv_back, p.cc.back(), leaving(true), p.normals.back(), s.axis, margin, s.run_out, zone_beside, tolerance);
+  left = back_in = false;
+  const auto front = trace_on(surface, m, level, p.uv_front, p.cc.front(), leaving(false), p.normals.front(), s.axis, margin, s.run_out, zone_beside, tolerance);
+  // The tool cuts the material at the edge from up to `margin` past it: the step must keep the
+  // bound there too.
+  const auto splice = [&](const std::vector<SurfaceContact>& run, Eigen::Vector3d last, bool at_back) {
+    std::vector<Eigen::Vector3d> points, normals;
+    double along = 0;
+    for (const auto& c : run) {
+      along += (c.point - last).norm();
+      last = c.point;
+      points.push_back(c.point);
+      normals.push_back(c.normal);
+      if (along <= margin) {
+        const ContactStep step = contact_step(c.normal, c.curvature, s);
+        p.worst_stepover = std::min(p.worst_stepover, step.stepover);
+        if (s.stepover != StepoverModel::seed) p.spacing = std::min(p.spacing, step.spacing);
+      }
+    }
+    p.run_out_length += along;
+    if (at_back) {
+      p.cc.insert(p.cc.end(), points.begin(), points.end());
+      p.normals.insert(p.normals.end(), normals.begin(), normals.end());
+    } else {
+      p.cc.insert(p.cc.begin(), points.rbegin(), points.rend());
+      p.normals.insert(p.normals.begin(), normals.rbegin(), normals.rend());
+    }
+  };
+  splice(back, p.cc.back(), true);
+  splice(front, p.cc.front(), false);
 }
 
 double plane_spacing(const std::vector<Pass>& plane) {
@@ -394,7 +422,7 @@ std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>&
   double first_reach = probe.empty() ? 0.5 * extent : 0.5 * spacing_of(probe);
   if (s.stepover != StepoverModel::seed)
     for (const auto& p : probe) first_reach = std::min(first_reach, p.reach);
-  double level = std::min(lo + first_reach, lo + 0.5 * extent);
+  double level = std::min(lo + std::max(first_reach, 0.5 * min_spacing), lo + 0.5 * extent);
   // The step the far edge allows, measured just inside it the same way (its own slicer: slicing
   // near the top first would make every later slice walk every cell).
   double last_reach = std::numeric_limits<double>::infinity();
@@ -406,6 +434,7 @@ std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>&
   int index = 0;
   while (true) {
     slicer.accept(level);
+    for (auto& p : plane) add_run_outs(p, slicer, mesh, s);
     double spacing = spacing_of(plane);
     for (auto& p : plane) {
       p.plane = index;
@@ -424,7 +453,7 @@ std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>&
       plane = passes_at(slicer, mesh, next, s);
     } else {
       // The last plane: within half a step of the far edge, the step the edge itself allows.
-      const double reach = std::min(0.5 * spacing, last_reach);
+      const double reach = std::max(0.5 * min_spacing, std::min(0.5 * spacing, last_reach));
       // (level = hi - reach need not give level + reach >= hi in floating point: the tolerance
       // ends the zone there instead of planning that plane forever.)
       if (!(level + reach < hi - 1e-9 * (1 + std::abs(hi)))) break;

@@ -60,6 +60,10 @@ struct Pass {
   int plane = 0;                // index of the plane in the zone (several passes share a plane where it crosses the zone more than once)
   double run_out_length = 0;    // mm of contact polyline added past the zone's edges (both ends)
   double reach = std::numeric_limits<double>::infinity();  // for a zone's first and last planes: how far to the zone's edge it alone keeps sh (plane units)
+  // Where the contact polyline leaves the zone (surface parameters of its ends before any run-out,
+  // in the order of cc as planned), and whether it has ends (not a closed loop).
+  Eigen::Vector2d uv_front = Eigen::Vector2d::Zero(), uv_back = Eigen::Vector2d::Zero();
+  bool open = false;
 };
 
 // The passes over the zone's mesh cells, in machining order (planes in increasing level; several

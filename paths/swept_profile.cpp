@@ -66,7 +66,8 @@ double one_pass_reach(const Tool& tool, const Eigen::Vector3d& n, const Eigen::V
   // The gap grows from 0 at the contact; bracket its crossing of sh, then bisect.
   double lo = 0, hi = 0.05;
   while (gap(hi) < scallop && hi < tool.radius) lo = hi, hi *= 1.5;
-  if (hi >= tool.radius) return tool.radius;
+  hi = std::min(hi, tool.radius);
+  if (gap(hi) < scallop) return tool.radius;  // the whole tool's width within sh (a vertical wall's side)
   for (int it = 0; it < 40; ++it) {
     const double mid = 0.5 * (lo + hi);
     (gap(mid) < scallop ? lo : hi) = mid;
@@ -106,16 +107,19 @@ SideReach SweptProfileTable::reach(double slope, double beta) const {
   const bool swapped = beta < 0;
   beta = std::abs(beta);
   if (beta > std::numbers::pi / 2) beta = std::numbers::pi - beta;
+  if (!std::isfinite(slope) || !std::isfinite(beta)) return {};  // no reach: the planner's floor
   const double x = std::clamp(slope / kSlopeStep, 0.0, slopes_ - 1.0), y = std::clamp(beta / kAzimuthStep, 0.0, azimuths_ - 1.0);
   const int i = std::min(static_cast<int>(x), slopes_ - 2), j = std::min(static_cast<int>(y), azimuths_ - 2);
-  const double fx = x - i, fy = y - j;
   const auto at = [&](int a, int b) { return table_[static_cast<std::size_t>(a * azimuths_ + b)]; };
-  SideReach r;
-  const auto mix = [&](double SideReach::*side) {
-    return (1 - fx) * ((1 - fy) * (at(i, j).*side) + fy * (at(i, j + 1).*side)) + fx * ((1 - fy) * (at(i + 1, j).*side) + fy * (at(i + 1, j + 1).*side));
-  };
-  r.minus = mix(&SideReach::minus);
-  r.plus = mix(&SideReach::plus);
+  // The smallest of the four neighbours, not a blend: near level ground the reach falls like
+  // 1 / sqrt(s), and a straight line between two slopes a degree apart lies above it (4.5 % at
+  // 1.5 deg), too wide a step; a degree's worth of caution costs little where the reach is flat.
+  SideReach r{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  for (const int a : {i, i + 1})
+    for (const int b : {j, j + 1}) {
+      r.minus = std::min(r.minus, at(a, b).minus);
+      r.plus = std::min(r.plus, at(a, b).plus);
+    }
   if (swapped) std::swap(r.minus, r.plus);
   return r;
 }

@@ -28,7 +28,7 @@ double one_pass_reach(const Tool& tool, const Eigen::Vector3d& normal, const Eig
 // The reach of the torus's two sides on level ground, tabulated once per tool and sh over the
 // slope s (against the axis, 1 deg steps) and the azimuth beta of the normal's part across the
 // axis, measured from the feed towards m = axis x feed (2 deg steps; the profile is the same at
-// pi - beta, and its sides swap at -beta); bilinear in between.
+// pi - beta, and its sides swap at -beta); the smallest of the four neighbouring entries.
 struct SideReach {
   double minus = 0, plus = 0;  // mm across, on the sides towards -m and +m
 };

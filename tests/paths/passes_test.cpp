@@ -161,7 +161,7 @@ ScallopCheck edge_strips(const drom::geometry::NurbsSurface& s, const FinishingP
 
 TEST(ScallopBound, RunOutsKeepItAtTheEdges) {
   // Passes stopped at an edge they meet obliquely leave the material between their ends to the
-  // tools' end caps; run on by the tool's radius past the edge, they keep sh up to it.
+  // tools' end caps; run on past the edge (finish.run_out's default), they keep sh up to it.
   for (const bool rubio : {true, false}) {
     const auto s = rubio ? drom::tests::rubio_surface() : drom::tests::choi_surface();
     const PcaPlane p = pca_plane(sample_surface(s, {}, 80, 80).points);
