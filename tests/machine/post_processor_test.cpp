@@ -146,3 +146,25 @@ TEST(ClFiles, ATableHeaderNamingAColumnTwiceIsRefused) {
     EXPECT_STREQ(e.what(), "bad.csv:1: the CL table's header names column 'x' twice");
   }
 }
+
+TEST(PostProcessorErrors, ARepeatedCutterLocationIsDroppedNotRefused) {
+  // A finishing path can repeat a point (a pass's last contact where the next link starts): a G1 to
+  // where the tool already is has no feed, so it gets no block at all, on 3 and 5 axes alike.
+  for (const char* name : {"vmc_3axis", "ucp710_like"}) {
+    const Kinematics kin(load_machine(name));
+    ClProgram cl;
+    cl.origin = "repeat.cl";
+    cl.points.push_back({{{0, 0, 10}, {0, 0, 1}}, 0, true, 2});
+    cl.points.push_back({{{10, 0, 10}, {0, 0, 1}}, 1000, false, 3});
+    cl.points.push_back({{{10, 0, 10}, {0, 0, 1}}, 1000, false, 4});
+    cl.points.push_back({{{20, 0, 10}, {0, 0, 1}}, 1000, false, 5});
+    const ClOnMachine on = cl_to_machine_program(cl, kin);
+    ASSERT_EQ(on.program.blocks.size(), 2u) << name << ": the moves to x = 10 and x = 20, not the one in place";
+    for (const MachineBlock& b : on.program.blocks) {
+      EXPECT_EQ(static_cast<int>(b.type), static_cast<int>(MoveType::Linear)) << name;
+      EXPECT_GT(b.programmed_duration, 0) << name;
+    }
+    const std::string gcode = post_process(cl, kin, {"repeat", 1, 12000, -1});
+    EXPECT_NE(gcode.find("G1"), std::string::npos) << name;
+  }
+}
