@@ -224,6 +224,20 @@ class ZoneSlicer {
   std::vector<char> in_zone_;
 };
 
+// A crossing of the mesh's edge (a, b) as a point of the iso-line it lies on: its parameters, and
+// the free parameter's range along that edge.
+IsoCrossing iso_crossing(const MachiningMesh& mesh, const Crossing& x) {
+  const int row = mesh.cells_v + 1, ia = x.a / row, ja = x.a % row, ib = x.b / row, jb = x.b % row;
+  IsoCrossing c;
+  c.along_u = ja == jb;
+  const double ua = mesh.node_u(ia), ub = mesh.node_u(ib), va = mesh.node_v(ja), vb = mesh.node_v(jb);
+  c.u = ua + x.t * (ub - ua);
+  c.v = va + x.t * (vb - va);
+  c.lo = c.along_u ? std::min(ua, ub) : std::min(va, vb);
+  c.hi = c.along_u ? std::max(ua, ub) : std::max(va, vb);
+  return c;
+}
+
 // One plane's passes, with the step each contact point allows. With `reach_side` (-1 or +1), also
 // how far towards that side (plane units) each pass alone keeps the bound: for the zone's first and
 // last planes.
@@ -242,18 +256,7 @@ std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, doubl
     if (s.exact) {
       // The same crossings solved on the true iso-curves, then refined along the true intersection.
       std::vector<IsoCrossing> iso;
-      const int row = mesh.cells_v + 1;
-      for (const auto& x : chain) {
-        const int ia = x.a / row, ja = x.a % row, ib = x.b / row, jb = x.b % row;
-        IsoCrossing c;
-        c.along_u = ja == jb;
-        const double ua = mesh.node_u(ia), ub = mesh.node_u(ib), va = mesh.node_v(ja), vb = mesh.node_v(jb);
-        c.u = ua + x.t * (ub - ua);
-        c.v = va + x.t * (vb - va);
-        c.lo = c.along_u ? std::min(ua, ub) : std::min(va, vb);
-        c.hi = c.along_u ? std::max(ua, ub) : std::max(va, vb);
-        iso.push_back(c);
-      }
+      for (const auto& x : chain) iso.push_back(iso_crossing(mesh, x));
       // Half the tolerance on the contact curve: the tool-tip curve, offset from it, bends up to a
       // few times more sharply where the ground is concave.
       const auto contacts = exact_chain(*mesh.surface, s.axis.cross(s.feed).normalized(), level, iso, p.normals, 0.5 * s.chord_tolerance);
@@ -268,8 +271,8 @@ std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, doubl
     }
     // The parameters of the chain's ends, where a run-out starts.
     const auto end_uv = [&](const Crossing& x) {
-      const int row = mesh.cells_v + 1, ia = x.a / row, ja = x.a % row, ib = x.b / row, jb = x.b % row;
-      return Eigen::Vector2d(mesh.node_u(ia) + x.t * (mesh.node_u(ib) - mesh.node_u(ia)), mesh.node_v(ja) + x.t * (mesh.node_v(jb) - mesh.node_v(ja)));
+      const IsoCrossing c = iso_crossing(mesh, x);
+      return Eigen::Vector2d(c.u, c.v);
     };
     Eigen::Vector2d uv_front = end_uv(chain.front()), uv_back = end_uv(chain.back());
     if ((p.cc.back() - p.cc.front()).dot(s.feed) < 0) {
