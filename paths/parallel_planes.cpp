@@ -14,6 +14,10 @@
 
 namespace drom::paths {
 
+double target_scallop(const PassSettings& s) {
+  return s.exact && s.stepover == StepoverModel::curved ? s.scallop - s.chord_tolerance : s.scallop;
+}
+
 ContactStep contact_step(const Eigen::Vector3d& n, const Eigen::Matrix3d& curvature, const PassSettings& s) {
   ContactStep c;
   const Eigen::Vector3d& a = s.axis;
@@ -28,7 +32,7 @@ ContactStep contact_step(const Eigen::Vector3d& n, const Eigen::Matrix3d& curvat
   Eigen::Vector3d across = n.cross(along);
   if (m.dot(across) < 0) across = -across;  // towards the next plane
   c.curvature = across.dot(curvature * across);
-  const double scallop = s.exact && s.stepover == StepoverModel::curved ? s.scallop - s.chord_tolerance : s.scallop;
+  const double scallop = target_scallop(s);
   double step = s.stepover == StepoverModel::curved ? curved_stepover(scallop, c.effective_radius, c.curvature) : flat_stepover(s.scallop, c.effective_radius);
   if (s.stepover == StepoverModel::curved && s.tool.kind == ToolKind::torus && step > 0) {
     // The torus's swept profile instead of eq. 1.5's circle on level ground (the sum of its two
@@ -301,7 +305,7 @@ std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, doubl
         if (reach_side * m.dot(across) < 0) across = -across;
         if (!across.allFinite() || along.norm() == 0) continue;
         const double kappa = across.dot(curvatures[i] * across);
-        const double y = one_pass_reach(s.tool, n, s.axis, along.normalized(), across, kappa, s.scallop - (s.exact ? s.chord_tolerance : 0.0));
+        const double y = one_pass_reach(s.tool, n, s.axis, along.normalized(), across, kappa, target_scallop(s));
         if (!std::isfinite(y)) continue;
         p.reach = std::min(p.reach, std::max(1e-3 * y, y * std::abs(m.dot(across)) + reach_side * 0.5 * y * y * kappa * m.dot(n)));
       }
@@ -411,7 +415,7 @@ std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>&
   if (cells.empty()) return result;
   PassSettings s = settings;
   if (s.stepover == StepoverModel::curved && s.tool.kind == ToolKind::torus && !s.profile)
-    s.profile = &swept_profile_table(s.tool, s.exact ? s.scallop - s.chord_tolerance : s.scallop);
+    s.profile = &swept_profile_table(s.tool, target_scallop(s));
   const Eigen::Vector3d normal = s.axis.cross(s.feed).normalized();
   ZoneSlicer slicer(mesh, cells, normal);
   const double lo = slicer.min_level(), hi = slicer.max_level(), extent = hi - lo;

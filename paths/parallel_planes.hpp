@@ -51,6 +51,11 @@ struct PassSettings {
   const SweptProfileTable* profile = nullptr;
 };
 
+// The scallop the curved model's step keeps between two passes: sh, less the chord tolerance in the
+// exact variant, whose chords leave that much more. The flat and seed models use eq. 2.3 at sh as
+// the seed does (they do not claim the bound on curved ground, docs/finishing.md section 5).
+double target_scallop(const PassSettings& settings);
+
 struct Pass {
   std::vector<Eigen::Vector3d> cc, normals;  // contact points in travel order, and the machined-side normals there
   double level = 0;             // the plane's offset along axis x feed, mm
