@@ -5,6 +5,7 @@
 #include "paths/finishing_plan.hpp"
 #include "paths/length_bound.hpp"
 #include "paths/pca.hpp"
+#include "paths/scallop_check.hpp"
 #include "paths/surface_samples.hpp"
 #include "tests/geometry/test_surfaces.hpp"
 
@@ -110,13 +111,21 @@ TEST(CuttingLengthBound, TheSeedsWorstPointRuleCanGoBelowIt) {
   // The seed places the next plane from the point of least effective radius alone. A ball's radius
   // is the same everywhere, so the first point of the pass sets the plane step, and where the
   // surface tilts across the pass more than there, the step along the surface exceeds eq. 2.3: on
-  // Rubio fed at -60 deg the seed's rule finishes in 12 % less than the bound (and leaves more than sh).
+  // Rubio fed at -60 deg the seed's rule finishes in 12 % less than the bound and leaves 1.5 sh
+  // (the scallop simulated, inside the surface); eq. 2.3 at every point keeps sh.
   const auto s = drom::tests::rubio_surface();
   Zones whole;
   whole.zone.assign(6400, 0);
   whole.cluster = {0};
   const double bound = shortest_cutting_length(s, {}, kBall, kScallop, Kinematics{}).length;
-  EXPECT_LT(plan(s, whole, {ZoneSetup{-60 * kDeg}}, kBall, StepoverModel::seed).pass_length(), 0.9 * bound);
+  const FinishingPlan seed = plan(s, whole, {ZoneSetup{-60 * kDeg}}, kBall, StepoverModel::seed);
+  EXPECT_LT(seed.pass_length(), 0.9 * bound);
+  const FinishingPlan flat = plan(s, whole, {ZoneSetup{-60 * kDeg}}, kBall, StepoverModel::flat);
+  const ScallopCheck wide = check_scallop(s, seed.zones, kBall, 0.2, 0.8, 0.2, 0.8, 30, 30), kept = check_scallop(s, flat.zones, kBall, 0.2, 0.8, 0.2, 0.8, 30, 30);
+  // Measured: the seed's rule 4874 mm and 0.0153 mm of scallop; eq. 2.3 at every point 6200 mm and 0.0087 mm.
+  EXPECT_GT(wide.max_height, 1.4 * kScallop);
+  EXPECT_LE(kept.max_height, kScallop);
+  EXPECT_GT(flat.pass_length(), bound);
 }
 
 TEST(CuttingLengthBound, TheSeedsRubioLengthsAlongTheSteepestSlopeLieBelowIt) {
