@@ -22,8 +22,9 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <cstdio>
+#include <cmath>
 #include <iostream>
+#include <limits>
 #include <numbers>
 #include <set>
 #include <string>
@@ -71,14 +72,17 @@ struct Scan {
   }
 
   // The zone's least time over feed directions: every 3 deg, then a pattern search down to 0.25 deg.
+  // A direction whose planes all miss a sliver of a zone plans nothing there: it does not count, and
+  // a zone no direction plans (a few cells) counts 0 s.
   std::pair<double, double> best_direction(const std::vector<int>& cells) const {
     const auto time_at = [&](double deg) {
       const ZoneMachining m = machine(cells, deg * kDeg, torus);
-      return m.passes.empty() ? 0.0 : m.time();
+      return m.passes.empty() ? std::numeric_limits<double>::infinity() : m.time();
     };
     double best = std::numeric_limits<double>::infinity(), at = 0;
     for (int a = -90; a < 90; a += 3)
       if (const double t = time_at(a); t < best) best = t, at = a;
+    if (!std::isfinite(best)) return {0.0, 0.0};
     for (double step = 1.5; step >= 0.25; step /= 2)
       for (const double sign : {1.0, -1.0})
         if (const double t = time_at(at + sign * step); t < best) best = t, at += sign * step;
@@ -102,7 +106,7 @@ struct Scan {
   // torus and ball), as the seed's chapter 3 does.
   json seed_protocol(const Zones& z) const {
     json j{{"zones", z.count()}};
-    double steep_t = 0, steep_l = 0, princ_t = 0, princ_l = 0;
+    double steep_t = 0, steep_l = 0, steep_passes = 0, princ_t = 0, princ_l = 0;
     for (int k = 0; k < z.count(); ++k) {
       std::vector<Eigen::Vector3d> normals, points;
       for (int q = 0; q < samples(); ++q)
@@ -114,7 +118,12 @@ struct Scan {
       const ZoneMachining steep = machine(cells, mean_steepest_azimuth(normals), torus);
       steep_t += steep.time();
       steep_l += steep.pass_length + steep.link_length;
-      if (points.size() < 3) continue;  // a sliver: no plane, no principal direction
+      steep_passes += steep.pass_length;
+      if (points.size() < 3) {  // a sliver: no plane, no principal direction; counted along its steepest slope
+        princ_t += steep.time();
+        princ_l += steep.pass_length + steep.link_length;
+        continue;
+      }
       const PcaPlane plane = pca_plane(points);
       j["lambda_ratios"].push_back(plane.lambda(0) / plane.lambda(1));
       const ZoneMachining t = machine(cells, plane.principal_azimuth, torus), b = machine(cells, plane.principal_azimuth, ball);
@@ -122,7 +131,7 @@ struct Scan {
       princ_t += better.time();
       princ_l += better.pass_length + better.link_length;
     }
-    j["steepest"] = {{"time_s", steep_t}, {"length_mm", steep_l}};
+    j["steepest"] = {{"time_s", steep_t}, {"length_mm", steep_l}, {"pass_length_mm", steep_passes}};
     j["principal"] = {{"time_s", princ_t}, {"length_mm", princ_l}};
     return j;
   }

@@ -1,7 +1,6 @@
 #include "paths/finish_run.hpp"
 
 #include "paths/finish_outputs.hpp"
-#include "paths/length_bound.hpp"
 #include "paths/plane_model.hpp"
 #include "paths/scallop_check.hpp"
 #include "machine/feed_prediction.hpp"
@@ -305,14 +304,6 @@ json run_finish(const FinishCase& c, const FinishRunOptions& o) {
   for (const auto& z : plan.zones)
     for (const auto& p : z.passes) run_outs += p.run_out_length;
   s["run_out"] = {{"longest_mm", settings.run_out}, {"contact_length_mm", run_outs}};
-  if (c.setup == SetupMode::three_axis && !c.orientation) {
-    // What the zoning leaves on the table: no path keeping eq. 2.3 at every point is shorter.
-    const CuttingLengthBound floor = shortest_cutting_length(surface, c.surface.trim, settings.tool, settings.scallop, settings.timer.cutting());
-    s["length_floor"] = {{"passes_mm", floor.length},
-                         {"time_at_feed_s", floor.time},
-                         {"area_mm2", floor.area},
-                         {"model", "every point at eq. 2.3's widest step (eq. 1.5 along its own steepest slope): no path keeping eq. 2.3 at every point (the flat model) is shorter"}};
-  }
   s["scallop_check"] = {{"points", check.points}, {"max_height_mm", check.max_height}, {"max_gouge_mm", check.max_gouge}, {"worst_uv", {check.worst_uv.x(), check.worst_uv.y()}}, {"grid", "40 x 40 over the surface"}};
   for (const auto& k : optima)
     s["optimization"].push_back({{"clusters", k.clusters}, {"zones", k.zones.count()}, {"f0_s", k.start_time}, {"f_star_s", k.best_time}, {"gain", k.gain()},
