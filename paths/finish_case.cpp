@@ -77,6 +77,7 @@ FinishCase load_finish_case(const std::filesystem::path& path, const std::vector
     if (o.size() != 2) r.fail("finish.orientation", "expected [phi, psi] in degrees: the tool axis's angle to Z and its azimuth");
     constexpr double deg = std::numbers::pi / 180;
     c.orientation = Eigen::Vector2d(o[0] * deg, o[1] * deg);
+    c.orientation_where = r.where("finish.orientation");
     const Eigen::Vector3d axis(std::sin(o[0] * deg) * std::cos(o[1] * deg), std::sin(o[0] * deg) * std::sin(o[1] * deg), std::cos(o[0] * deg));
     const SurfaceSamples s = sample_surface(c.surface.surface, c.surface.trim, c.samples, c.samples);
     for (int i = 0; i < s.size(); ++i)

@@ -26,6 +26,7 @@ struct FinishCase {
   double mesh_step = 0.5;           // mm
   SetupMode setup = SetupMode::three_axis;
   std::optional<Eigen::Vector2d> orientation;  // a fixed tool axis (phi, psi), radians: 3+2 without zoning
+  std::string orientation_where;                // where it was given ("case.toml:31: finish.orientation"), for errors found when planning
   // Zoning: optimised over K in [clusters_min, clusters_max], or one partition.
   bool optimize = true;
   int clusters_min = 2, clusters_max = 10;

@@ -104,13 +104,19 @@ class Search {
     return stats;
   }
 
-  // The black box on one zone; infinite where the setup leaves part of the zone out of the tool's reach.
-  ZoneResult run(const ZoneStats& z, const ZoneSetup& setup) {
+  // The black box on one zone; infinite where the setup leaves part of the zone out of the tool's
+  // reach, or (except at the seed's start point, which is reported as it is) where the tool gouges:
+  // somewhere the ground across the passes is more concave than the tool's trace (the torus's flat
+  // bottom laid on a concave zone).
+  ZoneResult run(const ZoneStats& z, const ZoneSetup& setup, bool start = false) {
     ZoneResult r;
     r.setup = setup;
     if (!accessible(p_.samples, z.samples, setup.axis())) return r;
     charge(z.share);
     const ZoneMachining m = machine_zone(p_.mesh, z.cells, 0, setup, p_.settings);
+    if (!start)
+      for (const auto& p : m.passes)
+        if (p.gouging_contacts > 0) return r;
     if (m.passes.empty()) {
       r.time = 0;
       return r;
@@ -240,9 +246,9 @@ class Search {
       if (!optimise) {
         if (o_.mode == SetupMode::pca_heuristic) {
           const ZoneSetup flat = heuristic_setup(z.plane, 0, 0);
-          r = run(z, heuristic_setup(z.plane, 0, machine_steepest_azimuth(p_.samples, z.samples, flat.rotation)));
+          r = run(z, heuristic_setup(z.plane, 0, machine_steepest_azimuth(p_.samples, z.samples, flat.rotation)), true);
         } else {
-          r = run(z, three_axis_setup(z.steepest));
+          r = run(z, three_axis_setup(z.steepest), true);
         }
       } else {
         const std::uint64_t key = zone_key(z.samples);

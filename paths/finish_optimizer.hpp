@@ -12,6 +12,9 @@
 // samples, so a partition seen again costs nothing. The budget counts black-box equivalents: a zone
 // evaluation costs its share of the surface's mesh cells, a partition 0.2, an S3 evaluation 5 % of
 // the zone's (the seed's measured surrogate cost ratios are 1.2-5.4 %).
+// A setup that undercuts the zone (eq. 4.1) or, past the seed's start point, gouges it (the curved
+// model's step is 0 somewhere: the ground across the pass more concave than the tool's trace) is
+// infeasible.
 #include "paths/clustering.hpp"
 #include "paths/finishing_plan.hpp"
 #include "paths/machining_mesh.hpp"

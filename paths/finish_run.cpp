@@ -216,6 +216,22 @@ json run_finish(const FinishCase& c, const FinishRunOptions& o) {
   totals << "  finish: " << zones.count() << " zones, " << plan.pass_count() << " passes, " << plan.time() << " s (passes " << plan.pass_time() << ", links "
          << plan.link_time() << ", retracts " << plan.retract_time() << ", between zones " << plan.move_time << "), " << plan.length() << " mm";
   say(totals.str());
+  const int gouges = plan.gouging_contacts();
+  std::string gouge_note;
+  if (gouges > 0) {
+    Eigen::Vector3d at = Eigen::Vector3d::Zero();
+    for (const auto& z : plan.zones)
+      for (const auto& p : z.passes)
+        if (p.gouging_contacts > 0 && at.isZero()) at = p.first_gouge;
+    std::ostringstream msg;
+    msg.precision(4);
+    msg << "the " << settings.tool.name() << " gouges the surface at " << gouges << " contact points, the first at (" << at.transpose()
+        << ") mm: the ground across the passes is more concave than the tool's trace there";
+    // A tool axis the user fixed is theirs to change; a setup drom chose is reported, loudly.
+    if (c.orientation) throw InputError(c.orientation_where + ": " + msg.str() + "; tilt the axis less, or use a ball or a smaller corner radius");
+    gouge_note = msg.str() + " (a smaller tool, or a ball, avoids it)";
+    say("  WARNING: " + gouge_note);
+  }
   const ScallopCheck check = check_scallop(surface, plan.zones, settings.tool, 0, 1, 0, 1, 40, 40);
 
   // Files.
@@ -304,6 +320,8 @@ json run_finish(const FinishCase& c, const FinishRunOptions& o) {
   for (const auto& z : plan.zones)
     for (const auto& p : z.passes) run_outs += p.run_out_length;
   s["run_out"] = {{"longest_mm", settings.run_out}, {"contact_length_mm", run_outs}};
+  s["gouging_contacts"] = gouges;
+  if (!gouge_note.empty()) s["gouge_warning"] = gouge_note;
   s["scallop_check"] = {{"points", check.points}, {"max_height_mm", check.max_height}, {"max_gouge_mm", check.max_gouge}, {"worst_uv", {check.worst_uv.x(), check.worst_uv.y()}}, {"grid", "40 x 40 over the surface"}};
   for (const auto& k : optima)
     s["optimization"].push_back({{"clusters", k.clusters}, {"zones", k.zones.count()}, {"f0_s", k.start_time}, {"f_star_s", k.best_time}, {"gain", k.gain()},

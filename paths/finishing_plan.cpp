@@ -40,6 +40,13 @@ double FinishingPlan::link_time() const { return sum_over(zones, &ZoneMachining:
 double FinishingPlan::retract_time() const { return sum_over(zones, &ZoneMachining::retract_time); }
 double FinishingPlan::pass_length() const { return sum_over(zones, &ZoneMachining::pass_length); }
 double FinishingPlan::link_length() const { return sum_over(zones, &ZoneMachining::link_length); }
+int FinishingPlan::gouging_contacts() const {
+  int n = 0;
+  for (const auto& z : zones)
+    for (const auto& p : z.passes) n += p.gouging_contacts;
+  return n;
+}
+
 int FinishingPlan::pass_count() const {
   int n = 0;
   for (const auto& z : zones) n += static_cast<int>(z.passes.size());

@@ -288,6 +288,7 @@ std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, doubl
     p.worst_stepover = p.spacing = p.worst_effective_radius = std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < p.cc.size(); ++i) {
       const ContactStep step = contact_step(p.normals[i], curvatures[i], s);
+      if (s.stepover == StepoverModel::curved && !(step.stepover > 0) && p.gouging_contacts++ == 0) p.first_gouge = p.cc[i];
       p.worst_stepover = std::min(p.worst_stepover, step.stepover);
       if (s.stepover != StepoverModel::seed) p.spacing = std::min(p.spacing, step.spacing);
       else if (step.effective_radius < p.worst_effective_radius * (1 - 1e-12)) p.spacing = step.spacing;  // ties: the first along the feed

@@ -64,6 +64,10 @@ struct Pass {
   double worst_effective_radius = 0;
   int plane = 0;                // index of the plane in the zone (several passes share a plane where it crosses the zone more than once)
   double run_out_length = 0;    // mm of contact polyline added past the zone's edges (both ends)
+  // Contact points where the ground across the pass is more concave than the tool's trace (the
+  // curved model's step is 0 there): the tool cuts into the surface beside them.
+  int gouging_contacts = 0;
+  Eigen::Vector3d first_gouge = Eigen::Vector3d::Zero();  // the first such contact (part frame), if any
   double reach = std::numeric_limits<double>::infinity();  // for a zone's first and last planes: how far to the zone's edge it alone keeps sh (plane units)
   // Where the contact polyline leaves the zone (surface parameters of its ends before any run-out,
   // in the order of cc as planned), and whether it has ends (not a closed loop).

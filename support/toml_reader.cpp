@@ -104,18 +104,22 @@ void TomlReader::apply_override(const std::string& assignment) {
   impl_->overridden.insert(key);
 }
 
+std::string TomlReader::where(const std::string& key) const {
+  std::ostringstream msg;
+  if (impl_->overridden.count(key)) {
+    msg << "--set " << printable(key);
+  } else if (auto* node = impl_->find(key); node && node->source().begin.line > 0) {
+    msg << origin_ << ":" << node->source().begin.line << ": " << printable(key);
+  } else {
+    msg << origin_ << ": " << printable(key);
+  }
+  return msg.str();
+}
+
 void TomlReader::fail(const std::string& key, const std::string& message) const {
   // "key = value: expected ..." reads better than "key: = value: expected ..."
   const std::string sep = message.rfind("= ", 0) == 0 ? " " : ": ";
-  std::ostringstream msg;
-  if (impl_->overridden.count(key)) {
-    msg << "--set " << printable(key) << sep << message;
-  } else if (auto* node = impl_->find(key); node && node->source().begin.line > 0) {
-    msg << origin_ << ":" << node->source().begin.line << ": " << printable(key) << sep << message;
-  } else {
-    msg << origin_ << ": " << printable(key) << sep << message;
-  }
-  throw InputError(msg.str());
+  throw InputError(where(key) + sep + message);
 }
 
 bool TomlReader::has(const std::string& key) const { return impl_->find(key) != nullptr; }

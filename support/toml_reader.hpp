@@ -54,6 +54,9 @@ class TomlReader {
   // Throws on the first key present in the file that no accessor read.
   void finish() const;
   [[noreturn]] void fail(const std::string& key, const std::string& message) const;
+  // Where a key was given, as fail() names it: "file:line: key", "file: key" or "--set key"; for
+  // errors found after reading (a run that finds the value unusable).
+  std::string where(const std::string& key) const;
   const std::string& origin() const { return origin_; }
   // The case after overrides, as TOML (for summaries and for the offline database).
   std::string resolved_text() const;

@@ -64,6 +64,11 @@ TEST(FinishCommand, BadInputExitsWithCode2) {
   EXPECT_EQ(undercut.exit_code, 2) << undercut.output;
   EXPECT_NE(undercut.output.find("finish.orientation"), std::string::npos) << undercut.output;
   EXPECT_NE(undercut.output.find("undercuts the surface"), std::string::npos) << undercut.output;
+  // A tool axis that does not undercut but lays the torus's flat bottom on Choi's concave valley.
+  const DromResult gouge = run_drom("finish " + kCases + "choi.toml --set tool.kind=torus --set finish.setup=3+2 --set 'finish.orientation=[17.0, 0.0]' --out " +
+                                    (root() / "gouge").string());
+  EXPECT_EQ(gouge.exit_code, 2) << gouge.output;
+  EXPECT_NE(gouge.output.find("--set finish.orientation: the torus R5 r2 gouges the surface"), std::string::npos) << gouge.output;
   const DromResult scallop = run_drom("finish " + kCases + "choi.toml --set finish.scallop=-1 --out " + (root() / "scallop").string());
   EXPECT_EQ(scallop.exit_code, 2) << scallop.output;
   EXPECT_NE(scallop.output.find("finish.scallop"), std::string::npos) << scallop.output;

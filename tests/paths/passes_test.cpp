@@ -303,4 +303,27 @@ TEST(ScallopBound, ThreePlusTwoZonesKeepIt) {
   EXPECT_LT(run_on.max_gouge, 2e-4);
 }
 
+TEST(Gouging, TheTorusLaidNormalToAConcaveZoneIsCountedAndTheSweptToolConfirmsIt) {
+  // The same zones and the seed's heuristic setups, with the torus: its flat bottom on Choi's
+  // concave zones. The curved model counts the contacts where the ground across the pass is more
+  // concave than the tool's trace; the swept tool (independent of that model) cuts the surface by
+  // the check's whole window there. In 3-axis, nothing is counted and nothing gouges.
+  const auto s = drom::tests::choi_surface();
+  const SurfaceSamples samples = sample_surface(s, {}, 80, 80);
+  const Zones zones = connected_zones(kmeans(samples, s, 3, ClusteringSettings{}), 80, 80);
+  std::vector<ZoneSetup> tilted, flat;
+  for (const auto& z : describe_zones(samples, zones)) {
+    tilted.push_back(heuristic_setup(z.plane, 0, 0));
+    flat.push_back(three_axis_setup(z.steepest_azimuth));
+  }
+  const MachiningMesh mesh = build_machining_mesh(s, {}, 0.5, 80, 80);
+  FinishingSettings fs;
+  fs.tool = kTorus;
+  const FinishingPlan gouging = plan_finishing(mesh, zones, tilted, fs), clean = plan_finishing(mesh, zones, flat, fs);
+  EXPECT_GT(gouging.gouging_contacts(), 1000);
+  EXPECT_GT(check_scallop(s, gouging.zones, kTorus, 0, 1, 0, 1, 40, 40).max_gouge, 0.04);
+  EXPECT_EQ(clean.gouging_contacts(), 0);
+  EXPECT_LT(check_scallop(s, clean.zones, kTorus, 0, 1, 0, 1, 40, 40).max_gouge, 1e-3);  // the fast variant's chords: 0.8 um
+}
+
 }  // namespace
