@@ -114,9 +114,7 @@ class Search {
     if (!accessible(p_.samples, z.samples, setup.axis())) return r;
     charge(z.share);
     const ZoneMachining m = machine_zone(p_.mesh, z.cells, 0, setup, p_.settings);
-    if (!start)
-      for (const auto& p : m.passes)
-        if (p.gouging_contacts > 0) return r;
+    if (!start && m.gouging_contacts() > 0) return r;
     if (m.passes.empty()) {
       r.time = 0;
       return r;

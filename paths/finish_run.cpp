@@ -220,9 +220,13 @@ json run_finish(const FinishCase& c, const FinishRunOptions& o) {
   std::string gouge_note;
   if (gouges > 0) {
     Eigen::Vector3d at = Eigen::Vector3d::Zero();
-    for (const auto& z : plan.zones)
-      for (const auto& p : z.passes)
-        if (p.gouging_contacts > 0 && at.isZero()) at = p.first_gouge;
+    for (const auto& z : plan.zones) {
+      const auto p = std::find_if(z.passes.begin(), z.passes.end(), [](const Pass& q) { return q.gouging_contacts > 0; });
+      if (p != z.passes.end()) {
+        at = p->first_gouge;
+        break;
+      }
+    }
     std::ostringstream msg;
     msg.precision(4);
     msg << "the " << settings.tool.name() << " gouges the surface at " << gouges << " contact points, the first at (" << at.transpose()

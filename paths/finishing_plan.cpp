@@ -42,8 +42,7 @@ double FinishingPlan::pass_length() const { return sum_over(zones, &ZoneMachinin
 double FinishingPlan::link_length() const { return sum_over(zones, &ZoneMachining::link_length); }
 int FinishingPlan::gouging_contacts() const {
   int n = 0;
-  for (const auto& z : zones)
-    for (const auto& p : z.passes) n += p.gouging_contacts;
+  for (const auto& z : zones) n += z.gouging_contacts();
   return n;
 }
 

@@ -42,6 +42,12 @@ ZoneMachining machine_zone(const MachiningMesh& mesh, const std::vector<int>& ce
   return z;
 }
 
+int ZoneMachining::gouging_contacts() const {
+  int n = 0;
+  for (const auto& p : passes) n += p.gouging_contacts;
+  return n;
+}
+
 void reverse_zone(ZoneMachining& z) {
   std::reverse(z.passes.begin(), z.passes.end());
   std::reverse(z.timed_lines.begin(), z.timed_lines.end());

@@ -58,6 +58,7 @@ struct ZoneMachining {
   double pass_length = 0, link_length = 0;
   int links = 0, retracts = 0;
   double time() const { return pass_time + link_time + retract_time; }
+  int gouging_contacts() const;  // over its passes (Pass::gouging_contacts)
   double length() const { return pass_length + link_length; }
   // Where the tool enters and leaves the zone (machine frame).
   Eigen::Vector3d start() const { return timed_lines.front().front(); }

@@ -37,6 +37,14 @@ FinishingSettings settings(const Tool& tool, StepoverModel model) {
   return fs;
 }
 
+// One zone over the 80 x 80 samples.
+Zones whole_surface() {
+  Zones z;
+  z.zone.assign(6400, 0);
+  z.cluster = {0};
+  return z;
+}
+
 FinishingPlan plan(const drom::geometry::NurbsSurface& surface, const Zones& zones, const std::vector<ZoneSetup>& setups, const Tool& tool,
                    StepoverModel model) {
   return plan_finishing(build_machining_mesh(surface, {}, 0.5, 80, 80), zones, setups, settings(tool, model));
@@ -98,9 +106,7 @@ TEST(CuttingLengthBound, NoPathThatKeepsEquation23AtEveryPointIsShorter) {
   for (const bool rubio : {true, false}) {
     const auto s = rubio ? drom::tests::rubio_surface() : drom::tests::choi_surface();
     const SurfaceSamples samples = sample_surface(s, {}, 80, 80);
-    Zones whole;
-    whole.zone.assign(6400, 0);
-    whole.cluster = {0};
+    const Zones whole = whole_surface();
     const Zones three = connected_zones(kmeans(samples, s, 3, {}), 80, 80);
     const auto shapes = describe_zones(samples, three);
     for (const Tool& tool : {kTorus, kBall}) {
@@ -128,9 +134,7 @@ TEST(CuttingLengthBound, TheSeedsWorstPointRuleCanGoBelowIt) {
   // Rubio fed at -60 deg the seed's rule finishes in 12 % less than the bound and leaves 1.5 sh
   // (the scallop simulated, inside the surface); eq. 2.3 at every point keeps sh.
   const auto s = drom::tests::rubio_surface();
-  Zones whole;
-  whole.zone.assign(6400, 0);
-  whole.cluster = {0};
+  const Zones whole = whole_surface();
   const double bound = shortest_cutting_length(s, {}, kBall, kScallop, Kinematics{}).length;
   const FinishingPlan seed = plan(s, whole, {ZoneSetup{-60 * kDeg}}, kBall, StepoverModel::seed);
   EXPECT_LT(seed.pass_length(), 0.9 * bound);
@@ -147,9 +151,7 @@ TEST(CuttingLengthBound, TheSeedsEdgeConventionCanGoBelowItOnAPlane) {
   // planning once the next plane would pass the far edge and leaves the band beyond the last pass to
   // its half step: 44 passes of 56 mm, 0.7 % below the floor. The flat model reaches the edge.
   const auto plane = plane_at(60 * kDeg, 56, 28);
-  Zones whole;
-  whole.zone.assign(6400, 0);
-  whole.cluster = {0};
+  const Zones whole = whole_surface();
   const double bound = shortest_cutting_length(plane, {}, kBall, kScallop, Kinematics{}).length;
   const double seed = plan(plane, whole, {ZoneSetup{90 * kDeg}}, kBall, StepoverModel::seed).pass_length();
   EXPECT_LT(seed, bound);
