@@ -12,7 +12,43 @@ add_link_options(-fsanitize=address,undefined)
 set(DROM_LSAN_OPTIONS LSAN_OPTIONS=suppressions=${CMAKE_CURRENT_LIST_DIR}/lsan_suppressions.txt:print_suppressions=0)
 # An instrumented Python module would need ASan preloaded into python: not built here.
 set(DROM_PYTHON OFF CACHE BOOL "Build the drom Python module" FORCE)
-# The test executables that run sanitized (tests/CMakeLists.txt labels their tests "sanitized"):
-# the readers' and the predictor's modules (support, case, reduce, online); levelset and fem (OpenVDB
-# removal, FE solves) are left out to keep CI short, and the end-to-end tests run the drom binary.
-set(DROM_SANITIZED_TESTS support_tests case_tests reduce_tests online_tests)
+# The sanitized stage (ctest -L sanitized, `bash scripts/test --sanitized`) runs what sanitizers are
+# for: readers, parsers and file formats, the predictor's hostile-stream handling, and the unit tests
+# of memory-heavy code (OpenVDB removal, FE assembly and factorizations, clouds, k-d trees, voxel
+# fields), each test about a minute at most under ASan on a loaded 2-core machine; no statistical
+# study, no end-to-end run (those run in the Release build).
+# drom_sanitized_tests(<test executable> <GoogleTest filter> <timeout s>): the timeout is at least 3x
+# the slowest chosen test's time measured under ASan + UBSan while a Release build ran beside it on
+# the same 2 cores (docs/building.md gives the table).
+set(DROM_SANITIZED_TESTS "")
+macro(drom_sanitized_tests executable filter timeout)
+  list(APPEND DROM_SANITIZED_TESTS ${executable})
+  set(DROM_SANITIZED_FILTER_${executable} "${filter}")
+  set(DROM_SANITIZED_TIMEOUT_${executable} ${timeout})
+endmacro()
+drom_sanitized_tests(support_tests "*" 60)      # slowest 4.9 s: the PNG plot (a child process)
+drom_sanitized_tests(case_tests "*" 60)         # 0.9 s
+drom_sanitized_tests(reduce_tests "*" 60)       # 1.8 s
+drom_sanitized_tests(machine_tests "*" 120)     # 13.2 s: LinuxCNC's milling samples through rs274
+drom_sanitized_tests(geometry_tests "*" 120)    # 23.9 s: a STEP file that crashes OpenCASCADE
+# Removal on small parts and the G-code reader; the plate at every voxel size, the panel's pocket,
+# the graded plate and the hex-mesh convergence study run in the Release build.
+drom_sanitized_tests(levelset_tests
+  "SweptVolume.*:GCode.*:Toolpath.*:ToolGeometry.*:CutFraction.*:Removal.FlatPlatePocketRemovesItsVolume:Removal.GCodeRoundTripGivesSameStationsAndVolumes:Removal.SpiralAndZigzagPocketsClearThePocket:RemovalFraction.TetGenBlockWithAPocketIsExact:RemovalFraction.CutsInsideElementsConvergeAtSecondOrder"
+  180)                                          # 49.2 s: the flat plate's pocket
+# Elements, quadrature, patch tests, the factorizations and their block updates, the CalculiX deck;
+# the layer-removal convergence studies run in the Release build.
+drom_sanitized_tests(fem_tests
+  "ShapeFunctions.*:Quadrature.*:PatchTest.*:IntactStock.*:Superposition.*:SpdSolver.*:TrailingBlockCholesky.*:BlockRefactorization.*:BlockPlan.*:CalculixDeck.*"
+  120)                                          # 22.5 s: the clamped panel and tet part
+# Clouds (readers, k-d trees, normals, drop, packets), finishing's planners and case reader; the
+# swept-tool scallop studies run in the Release build.
+drom_sanitized_tests(paths_tests
+  "-ScallopBound.TheTorusKeepsItFedObliquelyToTheSlope:ScallopBound.RunOutsKeepItAtTheEdges:ScallopBound.CurvedStepoverKeepsItOnBothSurfacesWithBothTools:ScallopBound.RunOutsKeepItOnTheSeamsBetweenZones:Gouging.*:CloudFinishing.SphereNoGougeAndScallopWithinTheBound"
+  180)                                          # 42.2 s: cloud finishing on a free-form patch
+# The axis dynamics, the voxel field's near field, the orient case reader's errors, two scenes.
+drom_sanitized_tests(orient_tests
+  "AxisDynamics.*:AxisIntegrators.*:OrientBump.*:OrientScenes.*:OrientBadInput.*:OrientVoxelField.TheNearFieldIsExactWhereTheGridCannotFollow:OrientClearance.BumpIsCollisionFreeWithTheModelOnly:OrientClearance.ImpellerVeinWithATorusCutterIsCollisionFreeWithTheModelOnly"
+  120)                                          # 28.3 s: the impeller's vein with a torus
+# The predictor, its hostile stream, the sensor and the loop's machine; not the 200-draw coverage study.
+drom_sanitized_tests(online_tests "-Predictor.NinetyFivePercentBandCoversTheTruthAtNinetyFivePercentOfNodes" 180)

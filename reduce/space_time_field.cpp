@@ -57,6 +57,13 @@ Eigen::VectorXd SpaceTimeField::time_factors(double t) const {
   return b;
 }
 
+double SpaceTimeField::at(Eigen::Index node, double t) const {
+  if (terms() == 0 || times_.size() == 0) return 0.0;
+  if (times_.size() == 1) return space_.row(node).dot(time_.row(0));
+  const auto [i, w] = locate_time(times_, t);
+  return space_.row(node).dot((1 - w) * time_.row(i) + w * time_.row(i + 1));
+}
+
 void SpaceTimeField::time_factors(double t, Eigen::Ref<Eigen::VectorXd> out) const {
   if (terms() == 0) return;  // no row to take of an empty matrix (finding 24)
   if (times_.size() == 0) {

@@ -32,7 +32,7 @@ class SpaceTimeField {
   void time_factors(double t, Eigen::Ref<Eigen::VectorXd> out) const;
   // f at every node at time t (nodes).
   Eigen::VectorXd at(double t) const { return space_ * time_factors(t); }
-  double at(Eigen::Index node, double t) const { return space_.row(node).dot(time_factors(t)); }
+  double at(Eigen::Index node, double t) const;  // one node: no temporary (the sensor's brute-force readings call it per point)
 
  private:
   Eigen::MatrixXd space_, time_;

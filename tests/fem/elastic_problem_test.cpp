@@ -172,7 +172,9 @@ TEST(IntactStock, ClampedPanelAndTetPartDoNotMove) {
   const PartShape block = PartShape::block({0, 0, 0}, {60, 40, 6});
   const Mesh tet = make_tet_mesh(layered_box_plc({0, 0, 0}, {60, 40, 6}, {}), {20.0, 1.4, 0});
   const StressProfile odd{{3, 5}, {60, -20}, {30, 10}};
-  for (auto [mesh, shape] : {std::pair{&hex, &panel}, std::pair{&tet, &block}}) {
+  for (const auto& mesh_and_shape : {std::pair{&hex, &panel}, std::pair{&tet, &block}}) {
+    const Mesh* mesh = mesh_and_shape.first;
+    const PartShape* shape = mesh_and_shape.second;  // a plain local: clang 14 cannot capture a structured binding
     ElasticProblem problem(*mesh, *shape, kAluminium, {odd});
     problem.equilibrate(isostatic_dofs(*mesh, *shape, std::vector<char>(static_cast<std::size_t>(mesh->node_count()), 1)));
     const auto faces = boundary_faces(*mesh);

@@ -155,6 +155,7 @@ def test_a_model_of_another_format_version_or_truncated_is_refused(coarse_job):
         drom.LightModel.read(str(edited))
 
 
+@pytest.mark.heavy
 def test_a_study_sweeps_a_loop_parameter(coarse_loop):
     case, out, _ = coarse_loop
     study = drom.run_study(case, "noise", [0.0, 0.05], str(out))
@@ -163,6 +164,7 @@ def test_a_study_sweeps_a_loop_parameter(coarse_loop):
         drom.run_study(case, "colour", [1.0], str(out))
 
 
+@pytest.mark.heavy
 def test_the_notebook_example_runs_and_plots(coarse_loop):
     out = coarse_loop[1]  # drom run's stages there are reused
     script = pathlib.Path(__file__).resolve().parents[2] / "examples" / "python" / "flat_plate.py"
