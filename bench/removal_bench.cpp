@@ -10,6 +10,7 @@
 #include <cmath>
 
 using namespace drom::levelset;
+using drom::geometry::PartShape;
 
 namespace {
 

@@ -5,7 +5,7 @@
 // 6 unit profiles. Prints JSON.
 //   build/bench/station_bench [stations=8] [nx=40]
 #include "fem/elastic_problem.hpp"
-#include "fem/element_geometry.hpp"
+#include "fem/mesh_geometry.hpp"
 #include "fem/node_sets.hpp"
 #include "fem/structured_mesh.hpp"
 #include "fem/supports.hpp"
@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
   const int n = argc > 2 ? std::atoi(argv[2]) : 40;
   const SingleThreadedKernels single_threaded_kernels;  // as in drom offline
 
-  const levelset::PartShape plate = levelset::PartShape::plate(1000, 1000, 10);
+  const geometry::PartShape plate = geometry::PartShape::plate(1000, 1000, 10);
   const fem::Mesh mesh = fem::make_structured_hex_mesh(plate, {n, n, 5, 1.0});
   const levelset::Tool tool = levelset::Tool::flat(12.5, 30);
   const auto path = levelset::pocket_toolpath(plate, {200, 200, 600, 600, 2}, tool, {levelset::PocketStrategy::OneWay, 20, 10, 2, 5, 0.01});
@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
   for (std::size_t k = 0; k < stations.size() && measured < wanted; ++k) {
     removal.sweep(levelset::cutting_polylines(path, timeline, previous, stations[k].path_length, 0.01));
     previous = stations[k].path_length;
-    removal.update_remaining(elements, levelset::RemovalCriterion::VolumeFraction, remaining, true);
+    removal.update_remaining(elements, geometry::RemovalCriterion::VolumeFraction, remaining, true);
     if (k % stride != 0) continue;
     problem.set_activity(remaining);
     const double a0 = problem.assembly_seconds(), f0 = problem.solver_stats().factorize_seconds;

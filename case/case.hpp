@@ -94,7 +94,7 @@ struct Case {
   std::filesystem::path truth_table;
   double truth_amplitude = 1;  // multiplies the truth's stresses (and so its displacements)
 
-  // [sensor]: the laser sheet (design.md §7).
+  // [sensor]: the laser sheet (docs/design.md §7).
   std::array<double, 3> sensor_offset{50, 0, 80};
   double sensor_angle = 90, sensor_length = 80, sensor_range = 200, sensor_period = 0.1, sensor_noise = 0.05;
   int sensor_points = 800;

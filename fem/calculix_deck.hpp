@@ -8,7 +8,7 @@
 // TYPE=STRESS), the clamps (*BOUNDARY), and one linear *STATIC step that removes the machined
 // elements (*MODEL CHANGE, TYPE=ELEMENT, REMOVE) and prints U of every node. ccx then solves
 //   K(a) u = -sum_e a_e int B^T sigma0,
-// drom's equation (design.md §3): a partly machined element (0 < a < 1) gets its own material of
+// drom's equation (docs/design.md §3): a partly machined element (0 < a < 1) gets its own material of
 // modulus a E and the initial stress a sigma0, so that both its stiffness and its load scale by a.
 // The one difference is quadrature: ccx integrates sigma0 with 3 Gauss points a direction, exact for
 // stress profiles up to degree 3 through an element; drom uses a rule exact for the profile's degree.

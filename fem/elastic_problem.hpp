@@ -1,5 +1,5 @@
 #pragma once
-// The full-order problem of design.md §1 and §3, in the deal.II style: one class, with
+// The full-order problem of docs/design.md §1 and §3, in the deal.II style: one class, with
 // setup (mesh, part, material, stress profiles), equilibrate, configure (activity, supports),
 // assemble_and_factorize, solve.
 //
@@ -10,7 +10,7 @@
 // Every profile (one per column) is solved on one factorization.
 #include "fem/element_operators.hpp"
 #include "fem/mesh.hpp"
-#include "levelset/part_shape.hpp"
+#include "geometry/part_shape.hpp"
 #include "fem/residual_stress.hpp"
 #include "fem/spd_solver.hpp"
 #include "fem/stiffness_pattern.hpp"

@@ -3,7 +3,7 @@
 // stiffness K_e = int B^T C B, initial-stress load f_e = int B^T sigma, and strain recovery.
 // Voigt order: xx, yy, zz, yz, xz, xy with engineering shear strains.
 #include "fem/mesh.hpp"
-#include "levelset/part_shape.hpp"
+#include "geometry/part_shape.hpp"
 #include "fem/residual_stress.hpp"
 #include "fem/shape_functions.hpp"
 

@@ -3,8 +3,8 @@
 // the free remaining plate (the FE core's reference, issue 2 check 3), and the curvature measured
 // on an FE displacement field.
 #include "fem/mesh.hpp"
-#include "levelset/material_removal.hpp"
-#include "levelset/part_shape.hpp"
+#include "geometry/element_geometry.hpp"
+#include "geometry/part_shape.hpp"
 #include "fem/residual_stress.hpp"
 
 #include <Eigen/Core>
@@ -13,7 +13,7 @@
 
 namespace drom::fem {
 
-using levelset::RemovalCriterion;
+using geometry::RemovalCriterion;
 
 // Remaining volume fraction of each element after removing everything with t > thickness - depth.
 // Centroid: 0 or 1 by the element centroid (the seed's criterion). VolumeFraction: by sub-cell

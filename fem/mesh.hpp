@@ -1,7 +1,7 @@
 #pragma once
 // A volume mesh of quadratic elements. Node ordering inside an element follows VTK's
 // (VTK_QUADRATIC_HEXAHEDRON, VTK_TRIQUADRATIC_HEXAHEDRON, VTK_QUADRATIC_TETRA) so meshes go to ParaView unchanged.
-#include "levelset/part_shape.hpp"
+#include "geometry/part_shape.hpp"
 
 #include <Eigen/Core>
 
@@ -11,7 +11,7 @@
 namespace drom::fem {
 
 // The stock's geometry is described upstream, where material removal is computed.
-using levelset::PartShape;
+using geometry::PartShape;
 
 enum class ElementType { Hex20, Hex27, Tet10 };
 // Hexahedra of either kind (serendipity Hex20, or the tensor-product Lagrange Hex27).

@@ -1,7 +1,7 @@
 #pragma once
-// Biaxial residual-stress profiles through the thickness in a Legendre basis (design.md §1):
+// Biaxial residual-stress profiles through the thickness in a Legendre basis (docs/design.md §1):
 // sigma_R = sigma11(s) e1(x)e1 + sigma22(s) e2(x)e2, sigma_ii(s) = sum_j a_ij P_j(s), j >= 2.
-#include "levelset/part_shape.hpp"
+#include "geometry/part_shape.hpp"
 
 #include <Eigen/Core>
 
@@ -11,7 +11,7 @@
 
 namespace drom::fem {
 
-using levelset::PartShape;
+using geometry::PartShape;
 
 double legendre(int degree, double s);
 

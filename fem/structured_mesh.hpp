@@ -2,7 +2,7 @@
 // Structured 20-node hexahedral meshes of plates and cylindrical panels (any PartShape),
 // optionally graded through the thickness.
 #include "fem/mesh.hpp"
-#include "levelset/part_shape.hpp"
+#include "geometry/part_shape.hpp"
 
 #include <vector>
 

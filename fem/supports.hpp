@@ -1,8 +1,8 @@
 #pragma once
 // Isostatic (3-2-1) supports and the best-fit rigid alignment a metrology lab applies to a
-// free part's measured shape (design.md §3).
+// free part's measured shape (docs/design.md §3).
 #include "fem/mesh.hpp"
-#include "levelset/part_shape.hpp"
+#include "geometry/part_shape.hpp"
 
 #include <Eigen/Core>
 

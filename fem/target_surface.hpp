@@ -1,5 +1,5 @@
 #pragma once
-// The target machined surface (design.md §5): the mesh nodes on the pocket floor, t = e - depth,
+// The target machined surface (docs/design.md §5): the mesh nodes on the pocket floor, t = e - depth,
 // inside the pocket's footprint. It is a material surface: these nodes move with the part.
 #include "fem/mesh.hpp"
 

@@ -1,7 +1,7 @@
 #pragma once
-// Quadratic tetrahedral meshes of closed surfaces (levelset/closed_surface.hpp) through TetGen.
+// Quadratic tetrahedral meshes of closed surfaces (geometry/closed_surface.hpp) through TetGen.
 #include "fem/mesh.hpp"
-#include "levelset/closed_surface.hpp"
+#include "geometry/closed_surface.hpp"
 
 #include <filesystem>
 #include <string>
@@ -9,9 +9,9 @@
 
 namespace drom::fem {
 
-using levelset::layered_box_plc;
-using levelset::Plc;
-using levelset::read_closed_stl;
+using geometry::layered_box_plc;
+using geometry::Plc;
+using geometry::read_closed_stl;
 
 struct TetMeshSpec {
   double max_volume = 0;         // mm^3 per tetrahedron; 0 = no limit

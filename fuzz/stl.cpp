@@ -1,4 +1,4 @@
-// Harness: an STL workpiece (levelset/closed_surface.hpp), ASCII or binary, read and checked closed as
+// Harness: an STL workpiece (geometry/closed_surface.hpp), ASCII or binary, read and checked closed as
 // part.shape = "stl" does. TetGen on what it accepts is the stl_mesh harness (a mesh per input is a
 // hundred times slower, so the reader's own long run goes without it). Seeds: closed boxes and the
 // shipped plate's stock written as STL.

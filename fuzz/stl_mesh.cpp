@@ -1,4 +1,4 @@
-// Harness: an STL workpiece read (levelset/closed_surface.hpp), then TetGen on what the reader accepts
+// Harness: an STL workpiece read (geometry/closed_surface.hpp), then TetGen on what the reader accepts
 // when small (fem/tet_mesh.hpp, as part.shape = "stl" does): whatever passes the reader's checks must
 // mesh, or fail with a message naming TetGen. Seeds: the stl harness's.
 #include "fem/tet_mesh.hpp"

@@ -50,17 +50,17 @@ const Eigen::Matrix3Xd& probe_points(bool hex) {
 ElementLattices::ElementLattices() = default;
 ElementLattices::~ElementLattices() = default;
 
-const Eigen::MatrixXd& ElementLattices::probe_shape(const ElementGeometry& elements, int node_count) const {
-  const bool hex = elements.reference_cell() == ReferenceCell::Hexahedron;
+const Eigen::MatrixXd& ElementLattices::probe_shape(const geometry::ElementGeometry& elements, int node_count) const {
+  const bool hex = elements.reference_cell() == geometry::ReferenceCell::Hexahedron;
   std::lock_guard<std::mutex> lock(mutex_);
   auto [it, added] = probe_shapes_.try_emplace({hex ? 0 : 1, node_count});
   if (added) it->second = elements.shape_values(probe_points(hex));
   return it->second;  // map nodes never move
 }
 
-std::shared_ptr<const ElementLattices::Lattice> ElementLattices::lattice(const ElementGeometry& elements, int node_count,
+std::shared_ptr<const ElementLattices::Lattice> ElementLattices::lattice(const geometry::ElementGeometry& elements, int node_count,
                                                                          const std::array<int, 3>& n) const {
-  const bool hex = elements.reference_cell() == ReferenceCell::Hexahedron;
+  const bool hex = elements.reference_cell() == geometry::ReferenceCell::Hexahedron;
   const std::array<int, 5> key{hex ? 0 : 1, node_count, n[0], n[1], n[2]};
   std::lock_guard<std::mutex> lock(mutex_);
   if (auto it = lattices_.find(key); it != lattices_.end()) return it->second;
@@ -116,8 +116,8 @@ std::shared_ptr<const ElementLattices::Lattice> ElementLattices::lattice(const E
   return made;
 }
 
-double ElementLattices::negative_share(const ElementGeometry& elements, std::size_t e, double spacing, const Field& field) const {
-  const bool hex = elements.reference_cell() == ReferenceCell::Hexahedron;
+double ElementLattices::negative_share(const geometry::ElementGeometry& elements, std::size_t e, double spacing, const Field& field) const {
+  const bool hex = elements.reference_cell() == geometry::ReferenceCell::Hexahedron;
   const Eigen::Matrix3Xd X = elements.nodes(e);
   const int node_count = static_cast<int>(X.cols());
   const Eigen::Matrix3Xd probes = X * probe_shape(elements, node_count);

@@ -44,7 +44,7 @@ struct Workpiece::SurfaceGrid {
   openvdb::FloatGrid::Ptr grid;
 };
 
-Workpiece Workpiece::from_shape(const PartShape& shape) {
+Workpiece Workpiece::from_shape(const geometry::PartShape& shape) {
   Workpiece w;
   w.shape_ = shape;
   Eigen::AlignedBox3d box;
@@ -56,7 +56,7 @@ Workpiece Workpiece::from_shape(const PartShape& shape) {
   return w;
 }
 
-Workpiece Workpiece::from_surface(const Plc& surface, double voxel_size) {
+Workpiece Workpiece::from_surface(const geometry::Plc& surface, double voxel_size) {
   initialize_openvdb();
   std::vector<openvdb::Vec3s> points;
   std::vector<openvdb::Vec3I> triangles;
@@ -71,7 +71,7 @@ Workpiece Workpiece::from_surface(const Plc& surface, double voxel_size) {
   const auto transform = openvdb::math::Transform::createLinearTransform(voxel_size);
   auto grid = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*transform, points, triangles, 3.0f);
   Workpiece w;
-  w.shape_ = PartShape::block(box.min(), box.max());
+  w.shape_ = geometry::PartShape::block(box.min(), box.max());
   w.surface_ = std::make_shared<SurfaceGrid>(SurfaceGrid{grid});
   w.bounds_ = box;
   return w;
@@ -242,7 +242,7 @@ bool MaterialRemoval::entered(const Eigen::AlignedBox3d& box, bool last_sweep_on
   return std::any_of(near.begin(), near.end(), [&](std::uint32_t k) { return enters(swept_->segments[k]); });
 }
 
-void MaterialRemoval::update_remaining(const ElementGeometry& elements, RemovalCriterion criterion, std::vector<double>& remaining,
+void MaterialRemoval::update_remaining(const geometry::ElementGeometry& elements, geometry::RemovalCriterion criterion, std::vector<double>& remaining,
                                        bool only_last_sweep) const {
   remaining.resize(elements.size(), 1.0);
   if (only_last_sweep && last_bounds_.isEmpty()) return;
@@ -294,7 +294,7 @@ void MaterialRemoval::update_remaining(const ElementGeometry& elements, RemovalC
       continue;
     }
     swept_->reaching(elements.bounds(e), reaching);
-    if (criterion == RemovalCriterion::Centroid) {
+    if (criterion == geometry::RemovalCriterion::Centroid) {
       const Eigen::Vector3d& c = elements.centroid(e);
       remaining[e] = (std::abs(phi(c)) > field.trust ? phi(c) : field.exact(c)) < 0 ? 0.0 : 1.0;
       continue;

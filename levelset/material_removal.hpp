@@ -2,10 +2,10 @@
 // The material the tool has removed, as an OpenVDB narrow-band level set (negative inside the
 // removed region), grown station by station by CSG union with the tool's swept volume clipped to
 // the workpiece; and what it means for the elements of a volume mesh.
-#include "levelset/closed_surface.hpp"
-#include "levelset/element_geometry.hpp"
+#include "geometry/closed_surface.hpp"
+#include "geometry/element_geometry.hpp"
+#include "geometry/part_shape.hpp"
 #include "levelset/element_lattice.hpp"
-#include "levelset/part_shape.hpp"
 #include "levelset/tool.hpp"
 
 #include <Eigen/Core>
@@ -17,20 +17,18 @@
 
 namespace drom::levelset {
 
-enum class RemovalCriterion { Centroid, VolumeFraction };
-
 // The stock, as a signed distance: a plate or panel analytically, or a closed STL through an
 // OpenVDB level set of it.
 class Workpiece {
  public:
-  static Workpiece from_shape(const PartShape& shape);
-  static Workpiece from_surface(const Plc& surface, double voxel_size);
+  static Workpiece from_shape(const geometry::PartShape& shape);
+  static Workpiece from_surface(const geometry::Plc& surface, double voxel_size);
   double signed_distance(const Eigen::Vector3d& x) const;
   const Eigen::AlignedBox3d& bounds() const { return bounds_; }
 
  private:
   struct SurfaceGrid;
-  PartShape shape_;
+  geometry::PartShape shape_;
   std::shared_ptr<const SurfaceGrid> surface_;
   Eigen::AlignedBox3d bounds_;
 };
@@ -65,7 +63,7 @@ class MaterialRemoval {
   // (levelset/cut_fraction.hpp). A plane is therefore integrated exactly at any voxel size, whether
   // it lies on element faces or inside them; curved cuts converge at second order in the lattice
   // spacing. An element with no stored voxel of the narrow band around it is wholly in or out.
-  void update_remaining(const ElementGeometry& elements, RemovalCriterion criterion, std::vector<double>& remaining,
+  void update_remaining(const geometry::ElementGeometry& elements, geometry::RemovalCriterion criterion, std::vector<double>& remaining,
                         bool only_last_sweep) const;
 
   double voxel_size() const { return voxel_; }

@@ -21,9 +21,9 @@ double stepover_for_scallop(const Tool& tool, double scallop) {
   return 2 * (tool.radius - r) + 2 * std::sqrt(2 * r * scallop - scallop * scallop);
 }
 
-double tool_tip_on_floor(const PartShape& shape, const Tool& tool, double floor_t, double u, double v) {
+double tool_tip_on_floor(const geometry::PartShape& shape, const Tool& tool, double floor_t, double u, double v) {
   const Eigen::Vector3d centre = shape.from_parametric({u, v, floor_t});
-  if (shape.kind() != PartShape::Kind::Panel) return centre.z();
+  if (shape.kind() != geometry::PartShape::Kind::Panel) return centre.z();
   // The floor varies along x only (axis along y): scan the footprint's x-diameter, then refine.
   auto floor_z = [&](double x) {
     const Eigen::Vector3d p = shape.to_parametric({x, v, centre.z()});
@@ -57,7 +57,7 @@ namespace {
 
 class PathBuilder {
  public:
-  PathBuilder(const PartShape& shape, const Tool& tool, const PocketSpec& pocket, const PocketPathSpec& spec)
+  PathBuilder(const geometry::PartShape& shape, const Tool& tool, const PocketSpec& pocket, const PocketPathSpec& spec)
       : shape_(shape), tool_(tool), spec_(spec), floor_t_(shape.thickness() - pocket.depth), safe_z_(shape.thickness() + spec.clearance) {}
 
   Eigen::Vector3d floor_point(double u, double v) const {
@@ -70,7 +70,7 @@ class PathBuilder {
   // Cuts along the floor from (u0, v0) to (u1, v1), subdividing where the floor is curved.
   void cut_along_floor(double u0, double v0, double u1, double v1) {
     int n = 1;
-    if (shape_.kind() == PartShape::Kind::Panel && std::abs(u1 - u0) > 0) {
+    if (shape_.kind() == geometry::PartShape::Kind::Panel && std::abs(u1 - u0) > 0) {
       const double radius = shape_.outer_radius() - shape_.thickness() + floor_t_;
       const double dphi = 2 * std::acos(1 - std::min(0.5, spec_.chord_tolerance / radius));
       n = std::max(1, static_cast<int>(std::ceil(std::abs(u1 - u0) / shape_.outer_radius() / dphi)));
@@ -102,7 +102,7 @@ class PathBuilder {
     position_ = p;
   }
 
-  const PartShape& shape_;
+  const geometry::PartShape& shape_;
   const Tool& tool_;
   const PocketPathSpec& spec_;
   double floor_t_, safe_z_;
@@ -112,7 +112,7 @@ class PathBuilder {
 
 }  // namespace
 
-Toolpath pocket_toolpath(const PartShape& shape, const PocketSpec& pocket, const Tool& tool, const PocketPathSpec& spec) {
+Toolpath pocket_toolpath(const geometry::PartShape& shape, const PocketSpec& pocket, const Tool& tool, const PocketPathSpec& spec) {
   if (!(spec.stepover > 0)) throw std::invalid_argument("stepover must be positive");
   if (spec.stepover > 2 * tool.radius) throw std::invalid_argument("stepover exceeds the tool diameter: material would be left between passes");
   if (pocket.depth >= tool.flute_length) throw std::invalid_argument("pocket deeper than the tool's flutes");

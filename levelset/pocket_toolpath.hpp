@@ -1,7 +1,7 @@
 #pragma once
 // Generated pocketing toolpaths: a rectangular pocket of constant depth below the stock's top face
 // (flat plate, or following a cylindrical panel), cleared one-way, zigzag or by an inward spiral.
-#include "levelset/part_shape.hpp"
+#include "geometry/part_shape.hpp"
 #include "levelset/tool.hpp"
 #include "levelset/toolpath.hpp"
 
@@ -34,10 +34,10 @@ double stepover_for_scallop(const Tool& tool, double scallop);
 
 // Tip altitude that puts the tool on the pocket floor without gouging it (3-axis, vertical tool):
 // the highest contact over the tool's footprint. Equal to the floor height on a flat plate.
-double tool_tip_on_floor(const PartShape& shape, const Tool& tool, double floor_t, double u, double v);
+double tool_tip_on_floor(const geometry::PartShape& shape, const Tool& tool, double floor_t, double u, double v);
 
 // Throws std::invalid_argument when the pocket cannot hold the tool or the stepover is unusable.
-Toolpath pocket_toolpath(const PartShape& shape, const PocketSpec& pocket, const Tool& tool, const PocketPathSpec& spec);
+Toolpath pocket_toolpath(const geometry::PartShape& shape, const PocketSpec& pocket, const Tool& tool, const PocketPathSpec& spec);
 
 // The v positions of the passes of a one-way or zigzag pocket (tool centre), first to last.
 std::vector<double> pass_positions(const PocketSpec& pocket, const Tool& tool, double stepover);

@@ -1,4 +1,4 @@
-// drom run (loop/closed_loop_run.hpp): the main job, the seed's §3.5 experiment (design.md §6-§7).
+// drom run (loop/closed_loop_run.hpp): the main job, the seed's §3.5 experiment (docs/design.md §6-§7).
 //   1. the case at the run's scale ([run] scale = "quick": a few minutes on two cores; "seed": as written);
 //   2. offline snapshots of the basis's unit profiles, and the light model (drom offline, drom reduce);
 //   3. the truth: the same machining with the [truth] profile, a profile outside the basis;

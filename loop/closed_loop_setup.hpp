@@ -3,7 +3,7 @@
 // model and the truth run under --out (each computed once and reused while the case that made it is
 // unchanged), and the closed loop's settings from the case.
 #include "case/case.hpp"
-#include "levelset/part_shape.hpp"
+#include "geometry/part_shape.hpp"
 #include "offline/job_team.hpp"
 #include "online/closed_loop.hpp"
 #include "reduce/light_model.hpp"
@@ -49,7 +49,7 @@ struct TruthPlay {
 struct ClosedLoopInputs {
   reduce::LightModel model;
   TruthRun truth;
-  levelset::PartShape shape;
+  geometry::PartShape shape;
   // The truth with its stresses multiplied by `factor` (displacements are linear in them).
   TruthPlay play(double factor = 1) const;
   double offline_seconds = 0, truth_seconds = 0, reduce_seconds = 0;  // this invocation's

@@ -1,4 +1,4 @@
-// drom study (loop/closed_loop_study.hpp): one closed-loop parameter swept, everything else as the case says (design.md §6-§7).
+// drom study (loop/closed_loop_study.hpp): one closed-loop parameter swept, everything else as the case says (docs/design.md §6-§7).
 //   1. the case at the run's scale, its offline database, model and truth (shared with drom run:
 //      the same --out reuses them, since none of the swept parameters changes them);
 //   2. per value, the loop with and without correction;

@@ -1,5 +1,5 @@
 // drom deviation: learn the blank's geometric deviation from laser profiles during the approach and
-// the first passes, and correct the tool's altitude (design.md §8, seed chapter 2).
+// the first passes, and correct the tool's altitude (docs/design.md §8, seed chapter 2).
 //   1. the deviation family on the area's grid and its POD basis (tolerance-bounded, reduce/pod.hpp);
 //   2. the program: the approach waypoints, then one-way passes along x; edges at every waypoint;
 //   3. offline, the scan extent needed (each mode in turn as the true surface);

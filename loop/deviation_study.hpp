@@ -1,6 +1,6 @@
 #pragma once
 // An unknown blank's deviation learned from laser profiles during the approach and the first passes,
-// and the tool's altitude corrected (drom deviation; design.md §8, seed chapter 2):
+// and the tool's altitude corrected (drom deviation; docs/design.md §8, seed chapter 2):
 //   1. the deviation family on the area's grid and its POD basis (tolerance-bounded, reduce/pod.hpp);
 //   2. the program: the approach waypoints, then one-way passes along x; edges at every waypoint;
 //   3. offline, the scan extent needed (each mode in turn as the true surface);

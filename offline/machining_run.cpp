@@ -1,6 +1,6 @@
 #include "offline/machining_run.hpp"
 
-#include "fem/element_geometry.hpp"
+#include "fem/mesh_geometry.hpp"
 #include "support/hdf5_writer.hpp"
 #include "support/input_error.hpp"
 
@@ -16,7 +16,7 @@ MachiningRun::MachiningRun(const cases::Case& c, const PartModel& part)
       voxel_(voxel_size_for(c, part)),
       removal_(std::make_unique<levelset::MaterialRemoval>(build_workpiece(c, part, voxel_), build_tool(c), voxel_)),
       elements_(part.mesh),
-      criterion_(c.removal_criterion == "centroid" ? levelset::RemovalCriterion::Centroid : levelset::RemovalCriterion::VolumeFraction) {
+      criterion_(c.removal_criterion == "centroid" ? geometry::RemovalCriterion::Centroid : geometry::RemovalCriterion::VolumeFraction) {
   if (stations_.empty()) throw InputError(c.origin + ": the toolpath has no cutting move, so there is no station");
 }
 

@@ -2,7 +2,7 @@
 // A case's machining, ready to step through station by station: its tool, toolpath, timeline and
 // stations, and the removal level set over the mesh's elements.
 #include "offline/part_setup.hpp"
-#include "fem/element_geometry.hpp"
+#include "fem/mesh_geometry.hpp"
 #include "levelset/material_removal.hpp"
 #include "levelset/toolpath.hpp"
 
@@ -45,7 +45,7 @@ class MachiningRun {
   double voxel_ = 0;
   std::unique_ptr<levelset::MaterialRemoval> removal_;
   fem::MeshGeometry elements_;  // refers to the part's mesh, which outlives the run
-  levelset::RemovalCriterion criterion_;
+  geometry::RemovalCriterion criterion_;
   std::size_t next_ = 0;
   double swept_to_ = 0;  // path length swept so far
 };

@@ -1,5 +1,5 @@
 #pragma once
-// The offline job (design.md §5): the machining simulated station by station on the stressed part.
+// The offline job (docs/design.md §5): the machining simulated station by station on the stressed part.
 //   offline: one response per unit stress profile -> the snapshot database (B1: w of the target
 //            surface over the stations; B1_top: the stock's top; B2: the free final shape);
 //   truth:   the same for the case's own [truth] profile, with full fields: what the closed loop

@@ -118,7 +118,7 @@ levelset::Toolpath build_toolpath(const cases::Case& c, const PartModel& part) {
 }
 
 levelset::Workpiece build_workpiece(const cases::Case& c, const PartModel& part, double voxel_size) {
-  if (c.shape == "stl") return levelset::Workpiece::from_surface(levelset::read_closed_stl(c.stl), voxel_size);
+  if (c.shape == "stl") return levelset::Workpiece::from_surface(geometry::read_closed_stl(c.stl), voxel_size);
   return levelset::Workpiece::from_shape(part.shape);
 }
 

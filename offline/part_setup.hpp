@@ -4,7 +4,7 @@
 #include "fem/element_operators.hpp"
 #include "fem/mesh.hpp"
 #include "levelset/material_removal.hpp"
-#include "levelset/part_shape.hpp"
+#include "geometry/part_shape.hpp"
 #include "levelset/tool.hpp"
 #include "levelset/toolpath.hpp"
 #include "fem/residual_stress.hpp"

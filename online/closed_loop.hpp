@@ -1,5 +1,5 @@
 #pragma once
-// The closed loop of design.md §6-§7, simulated: a machine runs the program with the tool-length
+// The closed loop of docs/design.md §6-§7, simulated: a machine runs the program with the tool-length
 // offset the predictor commands, a laser sheet on its spindle reads the floor it has cut as the part
 // distorts, the predictor learns from the readings, and the part is the truth run's.
 //

@@ -1,5 +1,5 @@
 #pragma once
-// Position synchronization (design.md §7; seed §2.2.5.2, fig. 2.26): the controller raises an edge
+// Position synchronization (docs/design.md §7; seed §2.2.5.2, fig. 2.26): the controller raises an edge
 // when the tool passes chosen waypoints; between edges the tool's progress is estimated from the last
 // edge, along the programmed path, and never past the next synchronized waypoint: at the programmed
 // feed, or with a model of the machine's real motion (machine/program_clock.hpp: the feed it really

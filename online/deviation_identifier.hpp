@@ -1,5 +1,5 @@
 #pragma once
-// Online identification of the blank's geometric deviation (design.md §8, seed §2.2.4, eqs.
+// Online identification of the blank's geometric deviation (docs/design.md §8, seed §2.2.4, eqs.
 // 2.15-2.18): laser points are fitted, in least squares, in a basis of deviation surfaces on a grid
 // (the POD modes of a deviation family, or the family itself); the fit extrapolates the deviation
 // over the whole area, where the tool has not been yet. Normal equations are accumulated profile by

@@ -1,5 +1,5 @@
 #pragma once
-// The laser-sheet sensor (design.md §7; seed §2.2.3.2, §2.3.2, §3.5.1), as the closed loop and the
+// The laser-sheet sensor (docs/design.md §7; seed §2.2.3.2, §2.3.2, §3.5.1), as the closed loop and the
 // blank-deviation identification simulate it. The sensor is fixed to the spindle head: its emission
 // point is offset from the tool tip in the machine frame, and its sheet meets the part along a
 // segment at a fixed angle to the machine's x axis (the main feed direction). Each of the sheet's

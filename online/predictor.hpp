@@ -1,5 +1,5 @@
 #pragma once
-// The online predictor (design.md §6): laser profiles in, tool-length offsets and the final shape out.
+// The online predictor (docs/design.md §6): laser profiles in, tool-length offsets and the final shape out.
 //
 // Measurement model. Where the tool cut (x, y) at program time t_cut, with commanded tip altitude
 // z_cmd = S0(x, y) + (offset applied at t_cut), a laser point read at program time t is

@@ -2,7 +2,7 @@
 // A nodal history on the target surface, w(node, t) at the offline stations, evaluated at any (x, y, t):
 // the surface's shape functions in space, linear in program time, 0 at the program's start and held
 // after the last station. In the closed loop it plays the real part: the truth run's displacement of
-// the target surface (design.md §6: the surface the tool cut then moves with it).
+// the target surface (docs/design.md §6: the surface the tool cut then moves with it).
 #include "reduce/space_time_field.hpp"
 #include "reduce/surface_mesh.hpp"
 

@@ -1,5 +1,5 @@
 #pragma once
-// The material indicator in separated form (design.md §4, eq. D.14): the remaining volume fraction of
+// The material indicator in separated form (docs/design.md §4, eq. D.14): the remaining volume fraction of
 // each tensor element (plane element e, thickness element k) written as
 //   I(e, k) = 1 - sum_m removed_plane[m](e) * removed_thickness[m](k).
 // A flat-bottom pocket machined by a flat end mill is exactly one removed term (two in all, with the

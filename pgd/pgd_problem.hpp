@@ -1,5 +1,5 @@
 #pragma once
-// The full-order problem of fem::ElasticProblem (design.md §1, §3), solved by PGD on a TensorGrid:
+// The full-order problem of fem::ElasticProblem (docs/design.md §1, §3), solved by PGD on a TensorGrid:
 //   1. equilibrate each stress profile on the intact free stock held 3-2-1 -> u0 (separated);
 //   2. set the remaining material (per Hex27 element) and the held dofs;
 //   3. solve  a_I(v, u) = - int I eps(v) : sigma_R - a_I(v, u0)  for each profile, warm-started from

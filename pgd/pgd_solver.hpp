@@ -1,5 +1,5 @@
 #pragma once
-// Greedy PGD solution of K u = F on a SeparatedOperator (design.md §4, seed Annex D):
+// Greedy PGD solution of K u = F on a SeparatedOperator (docs/design.md §4, seed Annex D):
 //   u_n = u_0 + sum_q R_q(u, v) S_q(t), one product at a time; each product by the alternating
 //   fixed point  S -> R (2D problem, S fixed) -> S (1D problem, R fixed), accelerated by SUNDIALS
 //   KINSOL's Anderson mixing (depth 0 = the plain fixed point of the seed);

@@ -1,5 +1,5 @@
 #pragma once
-// A displacement field in separated form (design.md §4, eq. D.7): each component i of the local
+// A displacement field in separated form (docs/design.md §4, eq. D.7): each component i of the local
 // frame (e1, e2, e3 = along u, along v, thickness normal) is sum_q X_q^i(u, v) Z_q^i(t), with X on the
 // in-plane nodes and Z on the thickness nodes of a TensorGrid.
 #include "pgd/tensor_grid.hpp"

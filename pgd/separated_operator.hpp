@@ -1,5 +1,5 @@
 #pragma once
-// The elasticity operator of design.md §3 on a TensorGrid, in separated form (seed Annex D,
+// The elasticity operator of docs/design.md §3 on a TensorGrid, in separated form (seed Annex D,
 // eqs. D.15-D.19): every strain component is a sum of products (in-plane operator on X) x (thickness
 // operator and metric weight on Z), so with the indicator I = sum_m I_m^plane I_m^thickness the
 // stiffness is sum over (m, in-plane operator pair) of A (x) B, with A a 2D matrix on the plane and B a
@@ -68,7 +68,7 @@ class SeparatedOperator {
   double free_norm(const ComponentTensors& r) const;
   // r -= K u, with the supports (penalty, foundation) or the elastic part only.
   void subtract_product(const SeparatedField& u, ComponentTensors& r, bool with_supports = true) const;
-  // -int I eps(v) : sigma_R for a through-thickness profile (the load of design.md §3 before u0).
+  // -int I eps(v) : sigma_R for a through-thickness profile (the load of docs/design.md §3 before u0).
   ComponentTensors stress_load(const fem::StressProfile& profile) const;
 
   // 2D operator of the Galerkin problem on (any plane functions) x span(Z_i), component by component:

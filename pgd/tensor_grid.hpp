@@ -1,18 +1,18 @@
 #pragma once
-// The plane/out-of-plane tensor discretization of design.md §4: structured quadratic Quad9 elements
+// The plane/out-of-plane tensor discretization of docs/design.md §4: structured quadratic Quad9 elements
 // on the part's parametric plane (u, v) times quadratic Line3 elements through the thickness t.
 // The 3D space it spans is exactly the Hex27 mesh fem::make_structured_hex_mesh builds for the same
 // (nu, nv, nt, grading), with the same node and element numbering, so the two solvers can be compared
 // node by node and the PGD field written with fem's VTK output.
 #include "fem/mesh.hpp"
-#include "levelset/part_shape.hpp"
+#include "geometry/part_shape.hpp"
 
 #include <array>
 #include <vector>
 
 namespace drom::pgd {
 
-using levelset::PartShape;
+using geometry::PartShape;
 
 struct TensorGrid {
   PartShape shape;

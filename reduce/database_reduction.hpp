@@ -1,5 +1,5 @@
 #pragma once
-// The reduce stage (design.md §5): an offline snapshot database in, the light model the online
+// The reduce stage (docs/design.md §5): an offline snapshot database in, the light model the online
 // predictor loads out. The database carries all it needs (the target's and the final part's faces,
 // the stock's top, the programmed path with its times, the tool, the case's own coefficients), so this
 // stage reads it alone.

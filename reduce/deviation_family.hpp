@@ -1,5 +1,5 @@
 #pragma once
-// The blank's possible geometric deviations (design.md §8, seed chapter 2): a family of surfaces on a
+// The blank's possible geometric deviations (docs/design.md §8, seed chapter 2): a family of surfaces on a
 // grid over the area of interest, from parametric defect classes and from surfaces measured on
 // earlier parts. Its POD (reduce/pod.hpp, the seed's tolerance-based truncation) gives the deviation
 // modes the online identification fits laser points in.

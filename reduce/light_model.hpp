@@ -1,5 +1,5 @@
 #pragma once
-// The light model (design.md §5): what the online predictor needs, and nothing of the full-order
+// The light model (docs/design.md §5): what the online predictor needs, and nothing of the full-order
 // databases. One HDF5 file, readable with h5py:
 //   - the target machined surface (nominal nodes and faces) and the program time at which the tool
 //     cut each of its nodes;

@@ -1,5 +1,5 @@
 #pragma once
-// From the offline databases to the light model's bases (design.md §5):
+// From the offline databases to the light model's bases (docs/design.md §5):
 //   1. scale B1's unit-profile columns to a plausible amplitude (profile_scale MPa), so tolerances
 //      and bounds are in mm of a plausible profile;
 //   2. POD with the fewest modes whose max-norm bound (seed eq. 2.9) meets `tolerance`;

@@ -1,5 +1,5 @@
 #pragma once
-// Snapshot POD truncated by the seed's error bounds (design.md §5; seed eqs. 2.9 and 2.12).
+// Snapshot POD truncated by the seed's error bounds (docs/design.md §5; seed eqs. 2.9 and 2.12).
 // With A = U D V^T and r modes kept, the part of snapshot j the modes miss is
 //   E_j = sum_{i>r} sigma_i V_ji U_i,  so  ||E_j||_inf <= sum_{i>r} sigma_i  and  ||E_j||_2 <= (sum_{i>r} sigma_i^2)^1/2
 // (|V_ji| <= 1 and ||U_i||_inf <= ||U_i||_2 = 1). The rank is the smallest r whose bound meets a

@@ -1,5 +1,5 @@
 #pragma once
-// A history over a surface, f(node, t), kept as sum_l a_l(node) b_l(t) (design.md §5): the SVD of the
+// A history over a surface, f(node, t), kept as sum_l a_l(node) b_l(t) (docs/design.md §5): the SVD of the
 // nodes x times array truncated at the fewest terms whose measured max error at the stored instants
 // is within `tolerance` (the history's unit). Between stored instants it is linear in time,
 // as the full history would be; before the first instant it goes linearly to `start_value` at

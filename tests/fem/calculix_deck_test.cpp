@@ -74,7 +74,7 @@ TEST(CalculixDeck, IntegrationPointsFollowCcxOrder) {
 }
 
 TEST(CalculixDeck, HoldsTheMachiningStateItDescribes) {
-  const levelset::PartShape shape = levelset::PartShape::plate(60, 40, 6);
+  const geometry::PartShape shape = geometry::PartShape::plate(60, 40, 6);
   const fem::Mesh mesh = fem::make_structured_hex_mesh(shape, {3, 2, 2, 1.0});
   const fem::Material material{71700, 0.33};
   fem::StressProfile profile;
@@ -157,7 +157,7 @@ TEST(CalculixDeck, HoldsTheMachiningStateItDescribes) {
 }
 
 TEST(CalculixDeck, RefusesMeshesCcxCannotHoldAndUnequilibratedProblems) {
-  const levelset::PartShape shape = levelset::PartShape::plate(20, 20, 4);
+  const geometry::PartShape shape = geometry::PartShape::plate(20, 20, 4);
   fem::StressProfile profile;
   profile.degrees = {2};
   profile.sigma11 = {-50};

@@ -180,7 +180,7 @@ namespace {
 // A 6 x 6 x 3 Hex20 plate held at its four bottom corners, with the top layer's middle 2 x 2 elements
 // machined away in steps (their shared top nodes end as orphans), one station after another.
 struct MachinedPlate {
-  levelset::PartShape shape = levelset::PartShape::plate(60, 60, 6);
+  geometry::PartShape shape = geometry::PartShape::plate(60, 60, 6);
   fem::Mesh mesh = fem::make_structured_hex_mesh(shape, {6, 6, 3, 1.0});
   std::vector<fem::StressProfile> profiles = fem::unit_profiles(fem::legendre_degrees(fem::ProfileParity::Even, 4));
   std::vector<int> clamped;
@@ -420,7 +420,7 @@ double plan_flops(const std::vector<double>& t, double m) {
 
 TEST(BlockPlan, OrdersTheBlockByTheCheaperOfLastAndFirstChange) {
   // Three elements in a row, a, b and c.
-  const auto shape = levelset::PartShape::plate(30, 10, 10);
+  const auto shape = geometry::PartShape::plate(30, 10, 10);
   const auto mesh = fem::make_structured_hex_mesh(shape, {3, 1, 1, 1.0});
   ASSERT_EQ(mesh.element_count(), 3);
   auto element_at = [&](double x) {

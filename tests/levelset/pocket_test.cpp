@@ -1,6 +1,6 @@
 // Issue 3 checks 2-4: removal on a hex mesh converges; a generated pocket survives G-code; whole
 // pockets remove their exact volume.
-#include "fem/element_geometry.hpp"
+#include "fem/mesh_geometry.hpp"
 #include "fem/structured_mesh.hpp"
 #include "levelset/gcode.hpp"
 #include "levelset/material_removal.hpp"
@@ -13,6 +13,8 @@
 
 using namespace drom;
 using namespace drom::levelset;
+using drom::geometry::RemovalCriterion;
+using drom::geometry::PartShape;
 
 namespace {
 

@@ -1,6 +1,6 @@
 // Issue 29: volume-fraction removal is exact for plane cuts on element faces at any voxel size, on
 // structured, graded and tetrahedral meshes, and converges for cuts inside elements.
-#include "fem/element_geometry.hpp"
+#include "fem/mesh_geometry.hpp"
 #include "fem/mesh.hpp"
 #include "fem/structured_mesh.hpp"
 #include "fem/tet_mesh.hpp"
@@ -17,6 +17,8 @@
 
 using namespace drom;
 using namespace drom::levelset;
+using drom::geometry::RemovalCriterion;
+using drom::geometry::PartShape;
 
 namespace {
 

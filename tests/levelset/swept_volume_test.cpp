@@ -8,6 +8,7 @@
 #include <cstdio>
 
 using namespace drom::levelset;
+using drom::geometry::PartShape;
 
 namespace {
 

@@ -179,7 +179,7 @@ ActivityHistory sweep(const drom::fem::Mesh& mesh, int per_station) {
 }  // namespace
 
 TEST(StationSchedule, StationsPerFactorizationFollowTheBlockCostModel) {
-  const auto shape = drom::levelset::PartShape::plate(160, 160, 2);
+  const auto shape = drom::geometry::PartShape::plate(160, 160, 2);
   const auto mesh = drom::fem::make_structured_hex_mesh(shape, {16, 16, 2, 1.0});
   const auto history = sweep(mesh, 2);  // 128 stations of 2 elements
   // A full factorization far dearer than any block: the largest chunk, whose first station is the

@@ -1,5 +1,5 @@
 #pragma once
-// What a noise-free laser reads on the machined floor (design.md §6, online/machined_floor.hpp):
+// What a noise-free laser reads on the machined floor (docs/design.md §6, online/machined_floor.hpp):
 // where the tool covered (x, y) at times tau with offset o(tau), the floor is the lowest cut in the
 // material's frame, S0 + min over tau of (o(tau) - w(x, y, tau)), moved by w(x, y, t) since. Brute
 // force, independent of the predictor's and the simulator's own searches: every cover's ends, the

@@ -1,16 +1,21 @@
 #pragma once
 // A volume mesh as removal sees it, whatever its element types and order: isoparametric elements,
 // each a map from its reference cell into space given by its nodes and its type's shape functions.
-// fem/ implements it for its meshes; levelset/ never needs to know the element types.
+// fem/ implements it for its meshes (fem/mesh_geometry.hpp); levelset/'s removal never needs to know
+// the element types.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
 #include <cstddef>
 
-namespace drom::levelset {
+namespace drom::geometry {
 
 // [-1, 1]^3, or the unit tetrahedron with corners (0,0,0), (1,0,0), (0,1,0), (0,0,1).
 enum class ReferenceCell { Hexahedron, Tetrahedron };
+
+// How removal judges an element: Centroid, removed or kept whole by its centroid (the seed's
+// criterion); VolumeFraction, the fraction of it still there (docs/design.md §2).
+enum class RemovalCriterion { Centroid, VolumeFraction };
 
 class ElementGeometry {
  public:
@@ -28,4 +33,4 @@ class ElementGeometry {
   virtual const Eigen::Vector3d& centroid(std::size_t e) const = 0;
 };
 
-}  // namespace drom::levelset
+}  // namespace drom::geometry

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <vector>
 
-namespace drom::levelset {
+namespace drom::geometry {
 
 // A piecewise-linear complex: points and planar polygonal facets (TetGen's input).
 struct Plc {
@@ -23,4 +23,4 @@ Plc read_closed_stl(const std::filesystem::path& path);
 // the tetrahedra conform to each level, so layer removal is exact on tets too.
 Plc layered_box_plc(const Eigen::Vector3d& min_corner, const Eigen::Vector3d& max_corner, std::vector<double> z_levels);
 
-}  // namespace drom::levelset
+}  // namespace drom::geometry

@@ -4,7 +4,7 @@
 // the bottom (inner) face. Residual-stress profiles, clamps and pockets are all stated in p.
 #include <Eigen/Core>
 
-namespace drom::levelset {
+namespace drom::geometry {
 
 class PartShape {
  public:
@@ -26,7 +26,7 @@ class PartShape {
 
   Eigen::Vector3d to_parametric(const Eigen::Vector3d& x) const;
   Eigen::Vector3d from_parametric(const Eigen::Vector3d& p) const;
-  // Reduced thickness coordinate s in [-1, 1] (design.md §1).
+  // Reduced thickness coordinate s in [-1, 1] (docs/design.md §1).
   double reduced_thickness(const Eigen::Vector3d& x) const;
   // Columns: e1 (along u), e2 (along v), e3 (outward thickness normal) at x.
   Eigen::Matrix3d local_frame(const Eigen::Vector3d& x) const;
@@ -40,4 +40,4 @@ class PartShape {
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
 };
 
-}  // namespace drom::levelset
+}  // namespace drom::geometry

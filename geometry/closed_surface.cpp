@@ -1,4 +1,4 @@
-#include "levelset/closed_surface.hpp"
+#include "geometry/closed_surface.hpp"
 
 #include "support/input_error.hpp"
 #include "support/stl_reader.hpp"
@@ -12,7 +12,7 @@
 #include <map>
 #include <sstream>
 
-namespace drom::levelset {
+namespace drom::geometry {
 
 Plc read_closed_stl(const std::filesystem::path& path) {
   const auto triangles = read_stl_facets(path);
@@ -85,4 +85,4 @@ Plc layered_box_plc(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, std::v
   return plc;
 }
 
-}  // namespace drom::levelset
+}  // namespace drom::geometry

@@ -1,10 +1,10 @@
-#include "levelset/part_shape.hpp"
+#include "geometry/part_shape.hpp"
 
 #include <algorithm>
 
 #include <cmath>
 
-namespace drom::levelset {
+namespace drom::geometry {
 
 PartShape PartShape::plate(double lx, double ly, double thickness) {
   PartShape s;
@@ -73,4 +73,4 @@ double PartShape::signed_distance(const Eigen::Vector3d& x) const {
   return outside.norm() + std::min(q.maxCoeff(), 0.0);
 }
 
-}  // namespace drom::levelset
+}  // namespace drom::geometry

@@ -1,4 +1,4 @@
-#include "fem/element_geometry.hpp"
+#include "fem/mesh_geometry.hpp"
 
 #include "fem/shape_functions.hpp"
 
@@ -15,8 +15,8 @@ MeshGeometry::MeshGeometry(const Mesh& mesh) : mesh_(mesh) {
   }
 }
 
-levelset::ReferenceCell MeshGeometry::reference_cell() const {
-  return is_hex(mesh_.type) ? levelset::ReferenceCell::Hexahedron : levelset::ReferenceCell::Tetrahedron;
+geometry::ReferenceCell MeshGeometry::reference_cell() const {
+  return is_hex(mesh_.type) ? geometry::ReferenceCell::Hexahedron : geometry::ReferenceCell::Tetrahedron;
 }
 
 Eigen::Matrix3Xd MeshGeometry::nodes(std::size_t e) const { return mesh_.element_nodes(static_cast<int>(e)); }
