@@ -57,23 +57,26 @@ Eigen::VectorXd SpaceTimeField::time_factors(double t) const {
   return b;
 }
 
+SpaceTimeField::TimeBlend SpaceTimeField::blend(double t) const {
+  if (times_.size() == 1) return {0, 0, 0.0};
+  const auto [i, w] = locate_time(times_, t);
+  return {i, i + 1, w};
+}
+
 double SpaceTimeField::at(Eigen::Index node, double t) const {
   if (terms() == 0 || times_.size() == 0) return 0.0;
-  if (times_.size() == 1) return space_.row(node).dot(time_.row(0));
-  const auto [i, w] = locate_time(times_, t);
-  return space_.row(node).dot((1 - w) * time_.row(i) + w * time_.row(i + 1));
+  const auto [lo, hi, w] = blend(t);
+  return space_.row(node).dot((1 - w) * time_.row(lo) + w * time_.row(hi));
 }
 
 void SpaceTimeField::time_factors(double t, Eigen::Ref<Eigen::VectorXd> out) const {
   if (terms() == 0) return;  // no row to take of an empty matrix (finding 24)
   if (times_.size() == 0) {
     out.setZero();
-  } else if (times_.size() == 1) {
-    out = time_.row(0).transpose();
-  } else {
-    const auto [i, w] = locate_time(times_, t);
-    out = ((1 - w) * time_.row(i) + w * time_.row(i + 1)).transpose();
+    return;
   }
+  const auto [lo, hi, w] = blend(t);
+  out = ((1 - w) * time_.row(lo) + w * time_.row(hi)).transpose();
 }
 
 }  // namespace drom::reduce

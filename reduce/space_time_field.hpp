@@ -35,6 +35,13 @@ class SpaceTimeField {
   double at(Eigen::Index node, double t) const;  // one node: no temporary (the sensor's brute-force readings call it per point)
 
  private:
+  // The stored instants t is read between and the later one's weight (one instant: itself alone).
+  struct TimeBlend {
+    Eigen::Index lo, hi;
+    double w;
+  };
+  TimeBlend blend(double t) const;  // needs an instant
+
   Eigen::MatrixXd space_, time_;
   Eigen::VectorXd times_;
   double bound_ = 0;
