@@ -8,10 +8,10 @@
 #include "geometry/cloud_bins.hpp"
 #include "geometry/cloud_kdtree.hpp"
 #include "machine/machine_definition.hpp"
-#include "paths/cloud_copy.hpp"
-#include "paths/tool_drop.hpp"
+#include "paths/copy/cloud_copy.hpp"
+#include "paths/copy/tool_drop.hpp"
 #include "support/resources.hpp"
-#include "tests/paths/test_clouds.hpp"
+#include "tests/paths/copy/test_clouds.hpp"
 
 #include <chrono>
 #include <cmath>

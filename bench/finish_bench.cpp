@@ -5,7 +5,7 @@
 //  - a full 3-axis optimisation on Rubio, K = 2..10 at 1000 evaluations per K, one thread (goal:
 //    under 60 s; the seed: about 35 min per surface).
 //   build/bench/finish_bench            (add --skip-optimisation for the path part alone)
-#include "paths/finish_optimizer.hpp"
+#include "paths/finish/finish_optimizer.hpp"
 #include "tests/geometry/test_surfaces.hpp"
 
 #include <algorithm>

@@ -5,7 +5,7 @@
 // and 4.1). Prints one JSON object per run with the split: precompute, poses, clearance check.
 //   build/bench/orient_bench [voxel|direct] [veins] [voxel_mm]     (results: docs/orientation.md)
 //   build/bench/orient_bench CASE.toml OUT [key=value ...]          (one case, timed, with drom orient's files)
-#include "paths/orient_run.hpp"
+#include "paths/orient/orient_run.hpp"
 
 #include <chrono>
 #include <cstdio>

@@ -3,6 +3,7 @@
 // of cutting travel. Also: the whole flat-plate pocket of the seed (600 x 600 x 2, 813 stations).
 //   build/bench/removal_bench --benchmark_format=json     (results: docs/benchmarks.md)
 #include "levelset/material_removal.hpp"
+#include "paths/cutter/tool_assembly.hpp"
 #include "levelset/pocket_toolpath.hpp"
 
 #include <benchmark/benchmark.h>
@@ -10,13 +11,14 @@
 #include <cmath>
 
 using namespace drom::levelset;
+using drom::paths::ToolAssembly;
 using drom::geometry::PartShape;
 
 namespace {
 
 void run_pocket(benchmark::State& state, double voxel, double pocket_side) {
   const PartShape plate = PartShape::plate(pocket_side + 400, pocket_side + 400, 10);
-  const Tool tool = Tool::flat(12.5, 30);
+  const ToolAssembly tool = ToolAssembly::flat(12.5, 30);
   const Toolpath path = pocket_toolpath(plate, {200, 200, pocket_side, pocket_side, 2}, tool, {PocketStrategy::OneWay, 20, 10, 2, 5, 0.01});
   const PathTimeline timeline(path);
   const auto stations = stations_by_spacing(path, timeline, 25);
@@ -38,7 +40,7 @@ void run_pocket(benchmark::State& state, double voxel, double pocket_side) {
   state.counters["level_set_mb"] = static_cast<double>(memory) / 1048576.0;
   state.counters["active_voxels"] = static_cast<double>(voxels);
   // The pocket less the four corners a round tool cannot reach.
-  const double exact = pocket_side * pocket_side * 2 - 4 * (1 - M_PI / 4) * tool.radius * tool.radius * 2;
+  const double exact = pocket_side * pocket_side * 2 - 4 * (1 - M_PI / 4) * tool.cutter.radius * tool.cutter.radius * 2;
   state.counters["volume_error_pct"] = 100 * (volume / exact - 1);
 }
 

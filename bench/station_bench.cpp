@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
 
   const geometry::PartShape plate = geometry::PartShape::plate(1000, 1000, 10);
   const fem::Mesh mesh = fem::make_structured_hex_mesh(plate, {n, n, 5, 1.0});
-  const levelset::Tool tool = levelset::Tool::flat(12.5, 30);
+  const paths::ToolAssembly tool = paths::ToolAssembly::flat(12.5, 30);
   const auto path = levelset::pocket_toolpath(plate, {200, 200, 600, 600, 2}, tool, {levelset::PocketStrategy::OneWay, 20, 10, 2, 5, 0.01});
   const levelset::PathTimeline timeline(path);
   const auto stations = levelset::stations_by_spacing(path, timeline, 25);

@@ -13,10 +13,10 @@
 //                                                     steepest with the torus, principal with the better tool
 //
 // Minutes each (best-directions at 9 levels: about an hour on one core).
-#include "paths/clustering.hpp"
-#include "paths/finish_optimizer.hpp"
-#include "paths/pca.hpp"
-#include "paths/zone_machining.hpp"
+#include "paths/finish/clustering.hpp"
+#include "paths/finish/finish_optimizer.hpp"
+#include "paths/finish/pca.hpp"
+#include "paths/finish/zone_machining.hpp"
 #include "tests/geometry/test_surfaces.hpp"
 
 #include <nlohmann/json.hpp>

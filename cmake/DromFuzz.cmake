@@ -41,14 +41,17 @@ drom_sanitized_tests(levelset_tests
 drom_sanitized_tests(fem_tests
   "ShapeFunctions.*:Quadrature.*:PatchTest.*:IntactStock.*:Superposition.*:SpdSolver.*:TrailingBlockCholesky.*:BlockRefactorization.*:BlockPlan.*:CalculixDeck.*"
   120)                                          # 24.2 s: superposition of unit responses
-# Clouds (readers, k-d trees, normals, drop, packets), finishing's planners and case reader; the
-# swept-tool scallop studies run in the Release build.
-drom_sanitized_tests(paths_tests
-  "-ScallopBound.TheTorusKeepsItFedObliquelyToTheSlope:ScallopBound.RunOutsKeepItAtTheEdges:ScallopBound.CurvedStepoverKeepsItOnBothSurfacesWithBothTools:ScallopBound.RunOutsKeepItOnTheSeamsBetweenZones:Gouging.*:CloudFinishing.SphereNoGougeAndScallopWithinTheBound"
+# The cutter model; finishing's planners and case reader, not the swept-tool scallop studies (they run
+# in the Release build); clouds (readers, k-d trees, normals, drop, packets, finishing).
+drom_sanitized_tests(cutter_tests "*" 60)
+drom_sanitized_tests(finish_tests
+  "-ScallopBound.TheTorusKeepsItFedObliquelyToTheSlope:ScallopBound.RunOutsKeepItAtTheEdges:ScallopBound.CurvedStepoverKeepsItOnBothSurfacesWithBothTools:ScallopBound.RunOutsKeepItOnTheSeamsBetweenZones:Gouging.*"
+  240)
+drom_sanitized_tests(copy_tests "-CloudFinishing.SphereNoGougeAndScallopWithinTheBound"
   240)                                          # 58.3 s: cloud finishing on a free-form patch
-# The axis dynamics, the voxel field's near field, the orient case reader's errors, two scenes.
+# The axis relaxed under the limits, the axis dynamics, the voxel field's near field, the orient case reader's errors, two scenes.
 drom_sanitized_tests(orient_tests
-  "AxisDynamics.*:AxisIntegrators.*:OrientBump.*:OrientScenes.*:OrientBadInput.*:OrientVoxelField.TheNearFieldIsExactWhereTheGridCannotFollow:OrientClearance.BumpIsCollisionFreeWithTheModelOnly:OrientClearance.ImpellerVeinWithATorusCutterIsCollisionFreeWithTheModelOnly"
+  "OrientationUnderLimits.*:AxisDynamics.*:AxisIntegrators.*:OrientBump.*:OrientScenes.*:OrientBadInput.*:OrientVoxelField.TheNearFieldIsExactWhereTheGridCannotFollow:OrientClearance.BumpIsCollisionFreeWithTheModelOnly:OrientClearance.ImpellerVeinWithATorusCutterIsCollisionFreeWithTheModelOnly"
   150)                                          # 39.9 s: the impeller's vein with a torus
 # The predictor, its hostile stream, the sensor and the loop's machine; not the 200-draw coverage study.
 drom_sanitized_tests(online_tests "-Predictor.NinetyFivePercentBandCoversTheTruthAtNinetyFivePercentOfNodes" 180)  # 45.0 s: ingest and queries at once

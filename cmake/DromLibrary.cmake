@@ -11,5 +11,8 @@ function(drom_library module)
   # Position-independent, so the Python module (a shared object) can link every library.
   set_target_properties(${target} PROPERTIES EXPORT_NAME ${module} POSITION_INDEPENDENT_CODE ON)
   install(TARGETS ${target} EXPORT dromTargets ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
-  install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/drom/${module} FILES_MATCHING PATTERN "*.hpp")
+  # Headers keep their place in the tree (paths/finish/... for the target paths_finish), so an
+  # installed #include "paths/finish/finish_run.hpp" reads as it does here.
+  file(RELATIVE_PATH folder ${PROJECT_SOURCE_DIR} ${CMAKE_CURRENT_SOURCE_DIR})
+  install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/drom/${folder} FILES_MATCHING PATTERN "*.hpp")
 endfunction()

@@ -14,7 +14,7 @@
 #include "machine/rs274_reader.hpp"
 #include "offline/offline_job.hpp"
 #include "offline/part_setup.hpp"
-#include "paths/copy_settings.hpp"
+#include "paths/copy/copy_settings.hpp"
 #include "reduce/database_reduction.hpp"
 #include "reduce/deviation_family.hpp"
 #include "support/atomic_file.hpp"

@@ -1,12 +1,12 @@
 // Harness: the toolpath side's case files, all read through support/toml_reader.hpp: the finishing
-// case (paths/finish_case.hpp, with its [surface] from geometry/surface_input.hpp), the copy settings
-// (paths/copy_settings.hpp) and the orientation case (paths/orient_run.hpp). The first byte picks the
+// case (paths/finish/finish_case.hpp, with its [surface] from geometry/surface_input.hpp), the copy settings
+// (paths/copy/copy_settings.hpp) and the orientation case (paths/orient/orient_run.hpp). The first byte picks the
 // reader, so one corpus mixes the three and the mutator carries keys across them. Seeds: cases/*.toml
 // of each kind and the default copy settings.
 #include "fuzz/fuzz_input.hpp"
-#include "paths/copy_settings.hpp"
-#include "paths/finish_case.hpp"
-#include "paths/orient_run.hpp"
+#include "paths/copy/copy_settings.hpp"
+#include "paths/finish/finish_case.hpp"
+#include "paths/orient/orient_run.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;

@@ -3,7 +3,7 @@
 // edge; a voxel is full when it holds points, and carries their barycentre and the normal of their
 // least-squares plane (unoriented; none under 3 points, and the seed asks 20 for a stable plane).
 // Sparse (OpenVDB trees, kept out of this header): a scanned part's voxels, not its bounding box's.
-// Z-level roughing tests the tool against the barycentres (paths/cloud_roughing.hpp).
+// Z-level roughing tests the tool against the barycentres (paths/copy/cloud_roughing.hpp).
 #include <Eigen/Core>
 
 #include <memory>

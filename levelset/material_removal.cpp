@@ -137,7 +137,7 @@ struct MaterialRemoval::SweptSegments {
   }
 };
 
-MaterialRemoval::MaterialRemoval(Workpiece workpiece, Tool tool, double voxel_size, double half_width)
+MaterialRemoval::MaterialRemoval(Workpiece workpiece, paths::ToolAssembly tool, double voxel_size, double half_width)
     : grid_(std::make_unique<Grid>()),
       workpiece_(std::move(workpiece)),
       tool_(tool),
@@ -145,7 +145,7 @@ MaterialRemoval::MaterialRemoval(Workpiece workpiece, Tool tool, double voxel_si
       band_(half_width * voxel_size),
       swept_(std::make_unique<SweptSegments>()),
       lattices_(std::make_unique<ElementLattices>()) {
-  swept_->bin = std::max(tool_.radius + band_, 4 * voxel_size);
+  swept_->bin = std::max(tool_.cutter.radius + band_, 4 * voxel_size);
   if (!(voxel_size > 0)) throw std::invalid_argument("voxel size must be positive");
   initialize_openvdb();
   grid_->grid = openvdb::FloatGrid::create(static_cast<float>(band_));
@@ -171,21 +171,21 @@ double MaterialRemoval::sweep(const std::vector<std::vector<Eigen::Vector3d>>& p
       const Eigen::Vector3d& a = line[s];
       const Eigen::Vector3d& b = line[s + 1];
       Eigen::AlignedBox3d box(a.cwiseMin(b), a.cwiseMax(b));
-      box.min() -= Eigen::Vector3d(tool_.radius + band_, tool_.radius + band_, band_);
-      box.max() += Eigen::Vector3d(tool_.radius + band_, tool_.radius + band_, tool_.flute_length + band_);
+      box.min() -= Eigen::Vector3d(tool_.cutter.radius + band_, tool_.cutter.radius + band_, band_);
+      box.max() += Eigen::Vector3d(tool_.cutter.radius + band_, tool_.cutter.radius + band_, tool_.flute_length + band_);
       const Eigen::AlignedBox3d reach = box;
       box = box.intersection(stock);
       if (box.isEmpty()) continue;
       last_bounds_.extend(box);
       Eigen::AlignedBox3d tool_box(a.cwiseMin(b), a.cwiseMax(b));
-      tool_box.min() -= Eigen::Vector3d(tool_.radius, tool_.radius, 0);
-      tool_box.max() += Eigen::Vector3d(tool_.radius, tool_.radius, tool_.flute_length);
+      tool_box.min() -= Eigen::Vector3d(tool_.cutter.radius, tool_.cutter.radius, 0);
+      tool_box.max() += Eigen::Vector3d(tool_.cutter.radius, tool_.cutter.radius, tool_.flute_length);
       swept_->add(a, b, reach, tool_box);
       const Eigen::Vector3i lo = (box.min() / voxel_).array().ceil().cast<int>();
       const Eigen::Vector3i hi = (box.max() / voxel_).array().floor().cast<int>();
       // Columns farther across than the tool's reach are skipped before any distance is computed.
       const Eigen::Vector2d a2 = a.head<2>(), ab2 = b.head<2>() - a.head<2>();
-      const double ab2_len2 = ab2.squaredNorm(), reach2 = (tool_.radius + band_) * (tool_.radius + band_);
+      const double ab2_len2 = ab2.squaredNorm(), reach2 = (tool_.cutter.radius + band_) * (tool_.cutter.radius + band_);
       for (int i = lo.x(); i <= hi.x(); ++i)
         for (int j = lo.y(); j <= hi.y(); ++j) {
           const Eigen::Vector2d c(i * voxel_, j * voxel_);
@@ -197,7 +197,7 @@ double MaterialRemoval::sweep(const std::vector<std::vector<Eigen::Vector3d>>& p
             const float old = acc.getValue(ijk);
             // Removal only lowers a voxel's value (old <= band): a sweep that cannot come nearer than
             // the value already stored changes nothing, and its search is skipped.
-            if (SweptSegments::lower_bound(swept_->segments.back(), tool_.radius, x) >= old) continue;
+            if (SweptSegments::lower_bound(swept_->segments.back(), tool_.cutter.radius, x) >= old) continue;
             const double swept = swept_signed_distance(tool_, axis, a, b, x, 0.01 * voxel_);
             if (swept >= band_) continue;
             const double phi = std::max(swept, workpiece_.signed_distance(x));
@@ -262,7 +262,7 @@ void MaterialRemoval::update_remaining(const geometry::ElementGeometry& elements
     double swept = band_;
     for (std::uint32_t k : reaching) {
       const auto& segment = swept_->segments[k];
-      if (!segment.reach.contains(x) || SweptSegments::lower_bound(segment, tool_.radius, x) >= swept) continue;
+      if (!segment.reach.contains(x) || SweptSegments::lower_bound(segment, tool_.cutter.radius, x) >= swept) continue;
       swept = std::min(swept, swept_signed_distance(tool_, Eigen::Vector3d::UnitZ(), segment.a, segment.b, x, 1e-7));
     }
     return std::min(std::max(swept, workpiece_.signed_distance(x)), band_);
@@ -330,8 +330,8 @@ void MaterialRemoval::write_surface(const std::filesystem::path& path) const {
   write_vtk_xml(*writer, path);
 }
 
-double default_voxel_size(const Tool& tool, double depth_of_cut, double smallest_element) {
-  return std::min({tool.radius / 8, tool.corner_radius > 0 ? tool.corner_radius / 4 : tool.radius, depth_of_cut / 4, smallest_element / 4});
+double default_voxel_size(const paths::ToolAssembly& tool, double depth_of_cut, double smallest_element) {
+  return std::min({tool.cutter.radius / 8, tool.cutter.corner_radius > 0 ? tool.cutter.corner_radius / 4 : tool.cutter.radius, depth_of_cut / 4, smallest_element / 4});
 }
 
 }  // namespace drom::levelset

@@ -6,7 +6,7 @@
 #include "geometry/element_geometry.hpp"
 #include "geometry/part_shape.hpp"
 #include "levelset/element_lattice.hpp"
-#include "levelset/tool.hpp"
+#include "paths/cutter/tool_assembly.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -36,7 +36,7 @@ class Workpiece {
 class MaterialRemoval {
  public:
   // half_width: narrow-band half width in voxels (3 is OpenVDB's default for level sets).
-  MaterialRemoval(Workpiece workpiece, Tool tool, double voxel_size, double half_width = 3);
+  MaterialRemoval(Workpiece workpiece, paths::ToolAssembly tool, double voxel_size, double half_width = 3);
   ~MaterialRemoval();
   MaterialRemoval(MaterialRemoval&&) noexcept;
 
@@ -76,7 +76,7 @@ class MaterialRemoval {
   struct Grid;
   std::unique_ptr<Grid> grid_;
   Workpiece workpiece_;
-  Tool tool_;
+  paths::ToolAssembly tool_;
   double voxel_, band_;
   double accumulated_ = 0;
   Eigen::AlignedBox3d last_bounds_;
@@ -92,6 +92,6 @@ class MaterialRemoval {
 
 // Voxel size from the tool and the mesh: fine enough to resolve the tool's corner and the thinnest
 // element through the depth of cut.
-double default_voxel_size(const Tool& tool, double depth_of_cut, double smallest_element);
+double default_voxel_size(const paths::ToolAssembly& tool, double depth_of_cut, double smallest_element);
 
 }  // namespace drom::levelset

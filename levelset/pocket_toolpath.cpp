@@ -6,22 +6,22 @@
 
 namespace drom::levelset {
 
-double scallop_height(const Tool& tool, double stepover) {
-  const double r = tool.corner_radius, flat = 2 * (tool.radius - r);
+double scallop_height(const paths::ToolAssembly& tool, double stepover) {
+  const double r = tool.cutter.corner_radius, flat = 2 * (tool.cutter.radius - r);
   if (stepover <= flat) return 0;
   const double half = 0.5 * (stepover - flat);
   if (half >= r) return r;  // the corners no longer overlap
   return r - std::sqrt(r * r - half * half);
 }
 
-double stepover_for_scallop(const Tool& tool, double scallop) {
-  const double r = tool.corner_radius;
+double stepover_for_scallop(const paths::ToolAssembly& tool, double scallop) {
+  const double r = tool.cutter.corner_radius;
   if (r <= 0) throw std::invalid_argument("a flat end mill leaves no scallop: set the stepover directly");
   if (!(scallop > 0 && scallop < r)) throw std::invalid_argument("scallop height must lie in (0, corner radius)");
-  return 2 * (tool.radius - r) + 2 * std::sqrt(2 * r * scallop - scallop * scallop);
+  return 2 * (tool.cutter.radius - r) + 2 * std::sqrt(2 * r * scallop - scallop * scallop);
 }
 
-double tool_tip_on_floor(const geometry::PartShape& shape, const Tool& tool, double floor_t, double u, double v) {
+double tool_tip_on_floor(const geometry::PartShape& shape, const paths::ToolAssembly& tool, double floor_t, double u, double v) {
   const Eigen::Vector3d centre = shape.from_parametric({u, v, floor_t});
   if (shape.kind() != geometry::PartShape::Kind::Panel) return centre.z();
   // The floor varies along x only (axis along y): scan the footprint's x-diameter, then refine.
@@ -33,10 +33,10 @@ double tool_tip_on_floor(const geometry::PartShape& shape, const Tool& tool, dou
   const int n = 64;
   double best_rho = 0, best = contact(0);
   for (int k = 0; k <= n; ++k) {
-    const double rho = -tool.radius + 2 * tool.radius * k / n;
+    const double rho = -tool.cutter.radius + 2 * tool.cutter.radius * k / n;
     if (const double z = contact(rho); z > best) best = z, best_rho = rho;
   }
-  double lo = std::max(-tool.radius, best_rho - 2 * tool.radius / n), hi = std::min(tool.radius, best_rho + 2 * tool.radius / n);
+  double lo = std::max(-tool.cutter.radius, best_rho - 2 * tool.cutter.radius / n), hi = std::min(tool.cutter.radius, best_rho + 2 * tool.cutter.radius / n);
   for (int it = 0; it < 60; ++it) {
     const double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
     if (contact(m1) < contact(m2)) lo = m1; else hi = m2;
@@ -44,8 +44,8 @@ double tool_tip_on_floor(const geometry::PartShape& shape, const Tool& tool, dou
   return std::max(best, contact(0.5 * (lo + hi)));
 }
 
-std::vector<double> pass_positions(const PocketSpec& pocket, const Tool& tool, double stepover) {
-  const double first = pocket.y_min + tool.radius, last = pocket.y_min + pocket.length_y - tool.radius;
+std::vector<double> pass_positions(const PocketSpec& pocket, const paths::ToolAssembly& tool, double stepover) {
+  const double first = pocket.y_min + tool.cutter.radius, last = pocket.y_min + pocket.length_y - tool.cutter.radius;
   if (last < first - 1e-9) throw std::invalid_argument("the pocket is narrower than the tool");
   std::vector<double> v{first};
   while (v.back() + stepover < last - 1e-9) v.push_back(v.back() + stepover);
@@ -57,7 +57,7 @@ namespace {
 
 class PathBuilder {
  public:
-  PathBuilder(const geometry::PartShape& shape, const Tool& tool, const PocketSpec& pocket, const PocketPathSpec& spec)
+  PathBuilder(const geometry::PartShape& shape, const paths::ToolAssembly& tool, const PocketSpec& pocket, const PocketPathSpec& spec)
       : shape_(shape), tool_(tool), spec_(spec), floor_t_(shape.thickness() - pocket.depth), safe_z_(shape.thickness() + spec.clearance) {}
 
   Eigen::Vector3d floor_point(double u, double v) const {
@@ -103,7 +103,7 @@ class PathBuilder {
   }
 
   const geometry::PartShape& shape_;
-  const Tool& tool_;
+  const paths::ToolAssembly& tool_;
   const PocketPathSpec& spec_;
   double floor_t_, safe_z_;
   Eigen::Vector3d position_ = Eigen::Vector3d::Zero();
@@ -112,14 +112,14 @@ class PathBuilder {
 
 }  // namespace
 
-Toolpath pocket_toolpath(const geometry::PartShape& shape, const PocketSpec& pocket, const Tool& tool, const PocketPathSpec& spec) {
+Toolpath pocket_toolpath(const geometry::PartShape& shape, const PocketSpec& pocket, const paths::ToolAssembly& tool, const PocketPathSpec& spec) {
   if (!(spec.stepover > 0)) throw std::invalid_argument("stepover must be positive");
-  if (spec.stepover > 2 * tool.radius) throw std::invalid_argument("stepover exceeds the tool diameter: material would be left between passes");
+  if (spec.stepover > 2 * tool.cutter.radius) throw std::invalid_argument("stepover exceeds the tool diameter: material would be left between passes");
   if (pocket.depth >= tool.flute_length) throw std::invalid_argument("pocket deeper than the tool's flutes");
-  const double u0 = pocket.x_min + tool.radius, u1 = pocket.x_min + pocket.length_x - tool.radius;
+  const double u0 = pocket.x_min + tool.cutter.radius, u1 = pocket.x_min + pocket.length_x - tool.cutter.radius;
   if (u1 < u0) throw std::invalid_argument("the pocket is shorter than the tool");
   PathBuilder b(shape, tool, pocket, spec);
-  const auto first = b.floor_point(u0, pocket.y_min + tool.radius);
+  const auto first = b.floor_point(u0, pocket.y_min + tool.cutter.radius);
   b.start_at({first.x(), first.y(), shape.thickness() + spec.clearance});
 
   if (spec.strategy == PocketStrategy::OneWay || spec.strategy == PocketStrategy::Zigzag) {
@@ -149,7 +149,7 @@ Toolpath pocket_toolpath(const geometry::PartShape& shape, const PocketSpec& poc
   }
 
   // Inward spiral: rectangular rings offset by the stepover, joined at depth.
-  double lo_u = u0, hi_u = u1, lo_v = pocket.y_min + tool.radius, hi_v = pocket.y_min + pocket.length_y - tool.radius;
+  double lo_u = u0, hi_u = u1, lo_v = pocket.y_min + tool.cutter.radius, hi_v = pocket.y_min + pocket.length_y - tool.cutter.radius;
   if (hi_v < lo_v) throw std::invalid_argument("the pocket is narrower than the tool");
   b.plunge_at(lo_u, lo_v);
   while (true) {

@@ -2,7 +2,7 @@
 // Generated pocketing toolpaths: a rectangular pocket of constant depth below the stock's top face
 // (flat plate, or following a cylindrical panel), cleared one-way, zigzag or by an inward spiral.
 #include "geometry/part_shape.hpp"
-#include "levelset/tool.hpp"
+#include "paths/cutter/tool_assembly.hpp"
 #include "levelset/toolpath.hpp"
 
 namespace drom::levelset {
@@ -28,18 +28,18 @@ struct PocketPathSpec {
 
 // Scallop height h left between passes s apart on a flat floor: h = r - sqrt(r^2 - (s - 2 (R - r))^2 / 4)
 // for the corner radius r (ball: r = R). Flat tools leave none while s <= 2R.
-double scallop_height(const Tool& tool, double stepover);
+double scallop_height(const paths::ToolAssembly& tool, double stepover);
 // The stepover that leaves the given scallop height (ball and bull-nose tools).
-double stepover_for_scallop(const Tool& tool, double scallop);
+double stepover_for_scallop(const paths::ToolAssembly& tool, double scallop);
 
 // Tip altitude that puts the tool on the pocket floor without gouging it (3-axis, vertical tool):
 // the highest contact over the tool's footprint. Equal to the floor height on a flat plate.
-double tool_tip_on_floor(const geometry::PartShape& shape, const Tool& tool, double floor_t, double u, double v);
+double tool_tip_on_floor(const geometry::PartShape& shape, const paths::ToolAssembly& tool, double floor_t, double u, double v);
 
 // Throws std::invalid_argument when the pocket cannot hold the tool or the stepover is unusable.
-Toolpath pocket_toolpath(const geometry::PartShape& shape, const PocketSpec& pocket, const Tool& tool, const PocketPathSpec& spec);
+Toolpath pocket_toolpath(const geometry::PartShape& shape, const PocketSpec& pocket, const paths::ToolAssembly& tool, const PocketPathSpec& spec);
 
 // The v positions of the passes of a one-way or zigzag pocket (tool centre), first to last.
-std::vector<double> pass_positions(const PocketSpec& pocket, const Tool& tool, double stepover);
+std::vector<double> pass_positions(const PocketSpec& pocket, const paths::ToolAssembly& tool, double stepover);
 
 }  // namespace drom::levelset

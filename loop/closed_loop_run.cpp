@@ -11,7 +11,7 @@
 #include "loop/closed_loop_run.hpp"
 #include "loop/replanned_finish.hpp"
 #include "machine/cl_data.hpp"
-#include "paths/cloud_path.hpp"
+#include "paths/copy/cloud_path.hpp"
 #include "support/atomic_file.hpp"
 
 #include "support/summary.hpp"

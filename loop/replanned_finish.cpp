@@ -1,8 +1,8 @@
 #include "loop/replanned_finish.hpp"
 
 #include "geometry/cloud_bins.hpp"
-#include "paths/cloud_area.hpp"
-#include "paths/tool_drop.hpp"
+#include "paths/copy/cloud_area.hpp"
+#include "paths/copy/tool_drop.hpp"
 
 #include <Eigen/Geometry>
 

@@ -2,13 +2,13 @@
 // `drom run --replan`: a finishing pass re-planned on the part as the model predicts it, not as drawn
 // (issue 23, after Makki 2009's direct machining of points). The final part's upward faces, moved by
 // the predicted final displacement, are sampled as a cloud; a ball is dropped on it along Z on a
-// zigzag grid with chord-tested nodes (paths/cloud_finishing.hpp). The path is then judged against
+// zigzag grid with chord-tested nodes (paths/copy/cloud_finishing.hpp). The path is then judged against
 // the truth: at every cut node, the same tool dropped on the truth's surface (sampled the same way)
 // gives the height it should have stood at; the difference is how far the path lies from the truth.
 // The nominal path (the tool dropped on the drawn surface) is judged the same way: it is off by the
 // distortion.
 #include "online/predictor.hpp"
-#include "paths/cloud_finishing.hpp"
+#include "paths/copy/cloud_finishing.hpp"
 
 #include <Eigen/Core>
 

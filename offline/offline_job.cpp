@@ -221,9 +221,9 @@ void write_reduction_inputs(Hdf5Writer& h5, const cases::Case& c, const PartMode
   for (std::size_t i = 0; i < top.size(); ++i) top_local[top[i]] = static_cast<int>(i);
   faces_dataset("top_faces", fem::faces_within(mesh, top), top_local);
   h5.write("pocket", std::vector<double>{c.pocket_x, c.pocket_y, c.pocket_length_x, c.pocket_length_y, c.pocket_depth}, 1, 5);
-  const levelset::Tool tool = build_tool(c);
+  const paths::ToolAssembly tool = build_tool(c);
   h5.attribute("tool_kind", c.tool_kind);
-  h5.attribute("tool_radius", tool.radius);
+  h5.attribute("tool_radius", tool.cutter.radius);
   const levelset::PathTimeline timeline(path);
   const auto waypoints = levelset::timed_waypoints(path, timeline);
   std::vector<double> xyzt(static_cast<std::size_t>(waypoints.xyzt.size())), cutting(waypoints.cutting.begin(), waypoints.cutting.end());

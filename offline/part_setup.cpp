@@ -92,15 +92,15 @@ std::vector<int> clamp_dofs(const cases::Case& c, const PartModel& part) {
 }
 
 
-levelset::Tool build_tool(const cases::Case& c) {
-  if (c.tool_kind == "ball") return levelset::Tool::ball(c.tool_radius, c.tool_flute_length);
-  if (c.tool_kind == "bull_nose") return levelset::Tool::bull_nose(c.tool_radius, c.tool_corner_radius, c.tool_flute_length);
-  return levelset::Tool::flat(c.tool_radius, c.tool_flute_length);
+paths::ToolAssembly build_tool(const cases::Case& c) {
+  if (c.tool_kind == "ball") return paths::ToolAssembly::ball(c.tool_radius, c.tool_flute_length);
+  if (c.tool_kind == "bull_nose") return paths::ToolAssembly::bull_nose(c.tool_radius, c.tool_corner_radius, c.tool_flute_length);
+  return paths::ToolAssembly::flat(c.tool_radius, c.tool_flute_length);
 }
 
 levelset::Toolpath build_toolpath(const cases::Case& c, const PartModel& part) {
   if (!c.gcode.empty()) return levelset::read_gcode(c.gcode.string());
-  const levelset::Tool tool = build_tool(c);
+  const paths::ToolAssembly tool = build_tool(c);
   levelset::PocketPathSpec spec;
   spec.strategy = c.path_strategy == "zigzag" ? levelset::PocketStrategy::Zigzag
                   : c.path_strategy == "spiral" ? levelset::PocketStrategy::Spiral

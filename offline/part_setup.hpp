@@ -5,7 +5,7 @@
 #include "fem/mesh.hpp"
 #include "levelset/material_removal.hpp"
 #include "geometry/part_shape.hpp"
-#include "levelset/tool.hpp"
+#include "paths/cutter/tool_assembly.hpp"
 #include "levelset/toolpath.hpp"
 #include "fem/residual_stress.hpp"
 #include "pgd/pgd_solver.hpp"
@@ -28,7 +28,7 @@ PartModel build_part(const cases::Case& c);
 std::vector<int> clamp_dofs(const cases::Case& c, const PartModel& part);
 fem::ProfileParity parity_of(const cases::Case& c);
 
-levelset::Tool build_tool(const cases::Case& c);
+paths::ToolAssembly build_tool(const cases::Case& c);
 // The case's G-code program if it names one, otherwise the generated pocket toolpath.
 levelset::Toolpath build_toolpath(const cases::Case& c, const PartModel& part);
 levelset::Workpiece build_workpiece(const cases::Case& c, const PartModel& part, double voxel_size);

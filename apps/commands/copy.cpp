@@ -1,6 +1,6 @@
-// drom copy: a scanned part copied by 3+2 machining of its point cloud (paths/copy_run.hpp).
+// drom copy: a scanned part copied by 3+2 machining of its point cloud (paths/copy/copy_run.hpp).
 #include "apps/commands.hpp"
-#include "paths/copy_run.hpp"
+#include "paths/copy/copy_run.hpp"
 #include "support/input_error.hpp"
 
 #include <cstdio>

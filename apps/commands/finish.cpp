@@ -1,7 +1,7 @@
 // drom finish: finishing paths on a free-form surface that take the least time under a scallop bound
-// (paths/finish_run.hpp).
+// (paths/finish/finish_run.hpp).
 #include "apps/commands.hpp"
-#include "paths/finish_run.hpp"
+#include "paths/finish/finish_run.hpp"
 #include "support/input_error.hpp"
 
 namespace drom::app {

@@ -1,6 +1,6 @@
-// drom orient: the collision-free tool-axis orientation of seed 000 on a case (paths/orient_run.hpp).
+// drom orient: the collision-free tool-axis orientation of seed 000 on a case (paths/orient/orient_run.hpp).
 #include "apps/commands.hpp"
-#include "paths/orient_run.hpp"
+#include "paths/orient/orient_run.hpp"
 #include "support/input_error.hpp"
 
 #include <iostream>

@@ -4,6 +4,7 @@
 #include "fem/structured_mesh.hpp"
 #include "levelset/gcode.hpp"
 #include "levelset/material_removal.hpp"
+#include "paths/cutter/tool_assembly.hpp"
 #include "levelset/pocket_toolpath.hpp"
 
 #include <gtest/gtest.h>
@@ -13,6 +14,7 @@
 
 using namespace drom;
 using namespace drom::levelset;
+using drom::paths::ToolAssembly;
 using drom::geometry::RemovalCriterion;
 using drom::geometry::PartShape;
 
@@ -28,7 +30,7 @@ double removed_volume(MaterialRemoval& removal, const Toolpath& path) {
 
 TEST(Toolpath, OneWayPocketPassesTimelineAndScallop) {
   const PartShape plate = PartShape::plate(1000, 1000, 10);
-  const Tool tool = Tool::flat(12.5, 30);
+  const ToolAssembly tool = ToolAssembly::flat(12.5, 30);
   const PocketSpec pocket{200, 200, 600, 600, 2};
   const auto passes = pass_positions(pocket, tool, 20);
   ASSERT_EQ(passes.size(), 30u);  // (600 - 25) / 20 + 1 = 29.75: the last pass follows the wall
@@ -50,10 +52,10 @@ TEST(Toolpath, OneWayPocketPassesTimelineAndScallop) {
     if (m.cutting()) cutting += m.length() / m.feed;
   EXPECT_NEAR(cutting, 30 * 57.5 + 31 * 3.5 + 4 * 57.5, 1e-6);
   // Scallop: h = R - sqrt(R^2 - s^2/4) for a ball; stepover_for_scallop inverts it.
-  const Tool ball = Tool::ball(5, 20);
+  const ToolAssembly ball = ToolAssembly::ball(5, 20);
   EXPECT_NEAR(scallop_height(ball, 2.0), 5 - std::sqrt(25 - 1.0), 1e-12);
   EXPECT_NEAR(stepover_for_scallop(ball, scallop_height(ball, 2.0)), 2.0, 1e-9);
-  const Tool bull = Tool::bull_nose(6, 2, 20);
+  const ToolAssembly bull = ToolAssembly::bull_nose(6, 2, 20);
   EXPECT_NEAR(scallop_height(bull, stepover_for_scallop(bull, 0.05)), 0.05, 1e-12);
   EXPECT_THROW(stepover_for_scallop(tool, 0.01), std::invalid_argument);
 }
@@ -61,7 +63,7 @@ TEST(Toolpath, OneWayPocketPassesTimelineAndScallop) {
 TEST(Removal, HexMeshDeactivatedVolumeConverges) {
   // A ball end mill pass (R 5, depth 2, 30 mm) through a 50 x 20 x 4 block meshed ever finer.
   const PartShape block = PartShape::plate(50, 20, 4);
-  const Tool ball = Tool::ball(5, 20);
+  const ToolAssembly ball = ToolAssembly::ball(5, 20);
   MaterialRemoval removal(Workpiece::from_shape(block), ball, 0.05);
   removal.sweep({{{10, 10, 2}, {40, 10, 2}}});
   const double alpha = std::asin(3.0 / 5);
@@ -97,7 +99,7 @@ TEST(Removal, HexMeshDeactivatedVolumeConverges) {
 
 TEST(Removal, GCodeRoundTripGivesSameStationsAndVolumes) {
   const PartShape plate = PartShape::plate(120, 80, 10);
-  const Tool tool = Tool::bull_nose(6, 1, 25);
+  const ToolAssembly tool = ToolAssembly::bull_nose(6, 1, 25);
   const PocketSpec pocket{20, 15, 80, 50, 2.5};
   const Toolpath path = pocket_toolpath(plate, pocket, tool, {PocketStrategy::Zigzag, 9, 10, 2, 5, 0.01});
   const Toolpath back = parse_gcode(write_gcode(path, "zigzag pocket"), "zigzag.nc");
@@ -120,7 +122,7 @@ TEST(Removal, GCodeRoundTripGivesSameStationsAndVolumes) {
 
 TEST(Removal, FlatPlatePocketRemovesItsVolume) {
   const PartShape plate = PartShape::plate(1000, 1000, 10);
-  const Tool tool = Tool::flat(12.5, 30);
+  const ToolAssembly tool = ToolAssembly::flat(12.5, 30);
   const PocketSpec pocket{200, 200, 600, 600, 2};
   MaterialRemoval removal(Workpiece::from_shape(plate), tool, 0.5);
   const double v = removed_volume(removal, pocket_toolpath(plate, pocket, tool, {PocketStrategy::OneWay, 20, 10, 2, 5, 0.01}));
@@ -134,7 +136,7 @@ TEST(Removal, FlatPlatePocketRemovesItsVolume) {
 TEST(Removal, CurvedPanelPocketRemovesItsExactVolume) {
   const double Ro = 1750, e = 4.5, d = 3;
   const PartShape panel = PartShape::panel(450, 450, e, Ro);
-  const Tool tool = Tool::flat(8, 25);
+  const ToolAssembly tool = ToolAssembly::flat(8, 25);
   const PocketSpec pocket{75, 75, 300, 300, d};
   MaterialRemoval removal(Workpiece::from_shape(panel), tool, 0.3);
   const Toolpath path = pocket_toolpath(panel, pocket, tool, {PocketStrategy::OneWay, 8.4, 10, 2, 5, 0.01});
@@ -173,7 +175,7 @@ TEST(Removal, CurvedPanelPocketRemovesItsExactVolume) {
 
 TEST(Removal, SpiralAndZigzagPocketsClearThePocket) {
   const PartShape plate = PartShape::plate(160, 120, 10);
-  const Tool tool = Tool::flat(6, 20);
+  const ToolAssembly tool = ToolAssembly::flat(6, 20);
   const PocketSpec pocket{30, 20, 100, 80, 1.5};
   const double exact = 100.0 * 80 * 1.5 - 4 * (1 - M_PI / 4) * 36 * 1.5;  // the corners keep the tool's radius
   for (auto strategy : {PocketStrategy::Spiral, PocketStrategy::Zigzag}) {

@@ -6,6 +6,7 @@
 #include "fem/tet_mesh.hpp"
 #include "levelset/cut_fraction.hpp"
 #include "levelset/material_removal.hpp"
+#include "paths/cutter/tool_assembly.hpp"
 #include "levelset/pocket_toolpath.hpp"
 
 #include <gtest/gtest.h>
@@ -17,6 +18,7 @@
 
 using namespace drom;
 using namespace drom::levelset;
+using drom::paths::ToolAssembly;
 using drom::geometry::RemovalCriterion;
 using drom::geometry::PartShape;
 
@@ -91,7 +93,7 @@ double median(std::vector<double> v) {
 // Machines a flat-end-mill pocket (one-way passes and the wall contour) through `mesh` and sorts the
 // remaining fractions by where each element lies. Walls and floor must lie on element faces or
 // between them as `floor_z` and the pocket's box say; the pocket's corners keep the tool's radius.
-LayerFractions machine_pocket(const fem::Mesh& mesh, const PartShape& plate, const PocketSpec& pocket, const Tool& tool, double stepover,
+LayerFractions machine_pocket(const fem::Mesh& mesh, const PartShape& plate, const PocketSpec& pocket, const ToolAssembly& tool, double stepover,
                               double voxel) {
   MaterialRemoval removal(Workpiece::from_shape(plate), tool, voxel);
   const Toolpath path = pocket_toolpath(plate, pocket, tool, {PocketStrategy::OneWay, stepover, 10, 2, 5, 0.01});
@@ -101,7 +103,7 @@ LayerFractions machine_pocket(const fem::Mesh& mesh, const PartShape& plate, con
   std::vector<double> remaining;
   removal.update_remaining(elements, RemovalCriterion::VolumeFraction, remaining, false);
   const auto volumes = fem::element_volumes(mesh);
-  const double top = plate.thickness(), floor_z = top - pocket.depth, R = tool.radius;
+  const double top = plate.thickness(), floor_z = top - pocket.depth, R = tool.cutter.radius;
   const double x0 = pocket.x_min, x1 = pocket.x_min + pocket.length_x, y0 = pocket.y_min, y1 = pocket.y_min + pocket.length_y;
   const double exact = pocket.length_x * pocket.length_y * pocket.depth - 4 * (1 - M_PI / 4) * R * R * pocket.depth;
   LayerFractions out;
@@ -155,7 +157,7 @@ TEST(RemovalFraction, QuickFlatPlateIsExactAtEveryVoxelSize) {
   const PartShape plate = PartShape::plate(1000, 1000, 10);
   const fem::Mesh mesh = fem::make_structured_hex_mesh(plate, {20, 20, 5, 1.0});
   for (double voxel : {0.5, 0.45, 0.4, 0.33, 0.3})
-    expect_exact(machine_pocket(mesh, plate, {200, 200, 600, 600, 2}, Tool::flat(12.5, 30), 20, voxel), "quick flat plate", voxel);
+    expect_exact(machine_pocket(mesh, plate, {200, 200, 600, 600, 2}, ToolAssembly::flat(12.5, 30), 20, voxel), "quick flat plate", voxel);
 }
 
 // Thickness-graded layers (bottom layer three times the top one): the floor on the face under the
@@ -166,7 +168,7 @@ TEST(RemovalFraction, GradedPlateIsExact) {
   const auto levels = fem::thickness_levels(10, 5, 3.0);
   const double depth = 10 - levels[levels.size() - 2];
   for (double voxel : {0.45, 0.33, 0.21})
-    expect_exact(machine_pocket(mesh, plate, {50, 50, 200, 200, depth}, Tool::flat(8, 30), 12, voxel), "graded plate", voxel);
+    expect_exact(machine_pocket(mesh, plate, {50, 50, 200, 200, depth}, ToolAssembly::flat(8, 30), 12, voxel), "graded plate", voxel);
 }
 
 // TetGen block with the floor plane in its PLC: the floor lies on tetrahedron faces, the walls cut
@@ -175,7 +177,7 @@ TEST(RemovalFraction, TetGenBlockWithAPocketIsExact) {
   const PartShape plate = PartShape::plate(120, 120, 10);
   const fem::Mesh mesh = fem::make_tet_mesh(fem::layered_box_plc({0, 0, 0}, {120, 120, 10}, {8.0}), {60.0, 1.4, 0});
   const PocketSpec pocket{20, 20, 80, 80, 2};
-  const Tool tool = Tool::flat(6, 30);
+  const ToolAssembly tool = ToolAssembly::flat(6, 30);
   for (double voxel : {0.45, 0.3}) {
     MaterialRemoval removal(Workpiece::from_shape(plate), tool, voxel);
     const Toolpath path = pocket_toolpath(plate, pocket, tool, {PocketStrategy::OneWay, 10, 10, 2, 5, 0.01});
@@ -291,7 +293,7 @@ TEST(RemovalFraction, CutsInsideElementsConvergeAtSecondOrder) {
   double previous = 0;
   std::vector<double> orders;
   for (double voxel : {0.4, 0.2, 0.1, 0.05}) {
-    MaterialRemoval removal(Workpiece::from_shape(block), Tool::ball(5, 20), voxel);
+    MaterialRemoval removal(Workpiece::from_shape(block), ToolAssembly::ball(5, 20), voxel);
     removal.sweep({{{10, 10, 2}, {40, 10, 2}}});
     std::vector<double> remaining;
     removal.update_remaining(elements, RemovalCriterion::VolumeFraction, remaining, false);

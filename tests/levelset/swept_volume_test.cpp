@@ -1,6 +1,6 @@
 // Issue 3 check 1: the volume a straight pass removes, against closed forms (seed Annex C).
 #include "levelset/material_removal.hpp"
-#include "levelset/tool.hpp"
+#include "paths/cutter/tool_assembly.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,12 +8,13 @@
 #include <cstdio>
 
 using namespace drom::levelset;
+using drom::paths::ToolAssembly;
 using drom::geometry::PartShape;
 
 namespace {
 
 // A pass of length D at depth h below the top of a 100 x 60 x 10 block, along x at y = 30.
-double measured(const Tool& tool, double h, double D, double voxel, double* accumulated = nullptr) {
+double measured(const ToolAssembly& tool, double h, double D, double voxel, double* accumulated = nullptr) {
   MaterialRemoval removal(Workpiece::from_shape(PartShape::plate(100, 60, 10)), tool, voxel);
   removal.sweep({{{30, 30, 10 - h}, {30 + D, 30, 10 - h}}});
   if (accumulated) *accumulated = removal.removed_volume();
@@ -35,7 +36,7 @@ TEST(SweptVolume, BallEndMillMatchesSeedAnnexC) {
   const double exact = M_PI * h * h * (3 * R - h) / 3 + R * R * D * (M_PI / 2 - alpha - std::sin(2 * alpha) / 2);
   EXPECT_NEAR(exact, 390.1, 0.2);  // the seed's "about 390.1"; the closed form gives 389.93
   double accumulated = 0;
-  const double v = measured(Tool::ball(R, 20), h, D, 0.1, &accumulated);
+  const double v = measured(ToolAssembly::ball(R, 20), h, D, 0.1, &accumulated);
   std::printf("ball: exact %.2f, level set %.2f (%.3f %%), voxel sum %.2f (%.3f %%)\n", exact, v, 100 * (v / exact - 1), accumulated,
               100 * (accumulated / exact - 1));
   EXPECT_NEAR(v / exact, 1.0, 0.005);
@@ -45,7 +46,7 @@ TEST(SweptVolume, BallEndMillMatchesSeedAnnexC) {
 TEST(SweptVolume, FlatEndMillMatchesClosedForm) {
   const double R = 5, h = 2, D = 30;
   const double exact = h * (M_PI * R * R + 2 * R * D);
-  const double v = measured(Tool::flat(R, 20), h, D, 0.1);
+  const double v = measured(ToolAssembly::flat(R, 20), h, D, 0.1);
   std::printf("flat: exact %.2f, level set %.2f (%.3f %%)\n", exact, v, 100 * (v / exact - 1));
   EXPECT_NEAR(v / exact, 1.0, 0.005);
 }
@@ -54,13 +55,13 @@ TEST(SweptVolume, BullNoseMatchesClosedForm) {
   const double R = 6, r = 2, h = 3, D = 30;
   const double exact = bull_nose_closed_form(R, r, h, D);
   EXPECT_NEAR(bull_nose_closed_form(5, 5, 5, 0), 2.0 / 3 * M_PI * 125, 1e-9);  // a ball at full depth: a half sphere
-  const double v = measured(Tool::bull_nose(R, r, 20), h, D, 0.1);
+  const double v = measured(ToolAssembly::bull_nose(R, r, 20), h, D, 0.1);
   std::printf("bull-nose: exact %.2f, level set %.2f (%.3f %%)\n", exact, v, 100 * (v / exact - 1));
   EXPECT_NEAR(v / exact, 1.0, 0.005);
 }
 
 TEST(SweptVolume, SecondPassOverRemovedMaterialRemovesNothing) {
-  MaterialRemoval removal(Workpiece::from_shape(PartShape::plate(100, 60, 10)), Tool::flat(5, 20), 0.2);
+  MaterialRemoval removal(Workpiece::from_shape(PartShape::plate(100, 60, 10)), ToolAssembly::flat(5, 20), 0.2);
   const std::vector<std::vector<Eigen::Vector3d>> pass{{{30, 30, 8}, {60, 30, 8}}};
   const double first = removal.sweep(pass);
   EXPECT_GT(first, 500);
@@ -71,7 +72,7 @@ TEST(SweptVolume, SecondPassOverRemovedMaterialRemovesNothing) {
 }
 
 TEST(ToolGeometry, SignedDistanceOfEachKind) {
-  const Tool ball = Tool::ball(5, 20), flat = Tool::flat(5, 20), bull = Tool::bull_nose(5, 2, 20);
+  const ToolAssembly ball = ToolAssembly::ball(5, 20), flat = ToolAssembly::flat(5, 20), bull = ToolAssembly::bull_nose(5, 2, 20);
   EXPECT_NEAR(ball.signed_distance(0, 0), 0, 1e-12);
   EXPECT_NEAR(ball.signed_distance(0, 5), -5, 1e-12);
   EXPECT_NEAR(ball.signed_distance(8, 5), 3, 1e-12);

@@ -1,0 +1,191 @@
+#include "paths/copy/copy_run.hpp"
+
+#include "geometry/cloud_reader.hpp"
+#include "geometry/cloud_writer.hpp"
+#include "machine/machine_definition.hpp"
+#include "paths/copy/cloud_copy.hpp"
+#include "support/atomic_file.hpp"
+#include "support/input_error.hpp"
+#include "support/summary.hpp"
+#include "support/vtk_fields.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+namespace drom::paths {
+
+namespace {
+
+std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string() + ": cannot open the settings file");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+nlohmann::json vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+// A path as polylines, one per run of moves of the same kind, in the part frame (q^T tip), with the
+// motion (0 cut, 1 link, 2 rapid) and pass of each point.
+void write_path_vtp(const std::filesystem::path& file, const CloudPath& path, const Eigen::Matrix3d& q) {
+  Polylines p;
+  p.points.resize(3, static_cast<Eigen::Index>(path.size()));
+  std::vector<double> motion, pass;
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    p.points.col(static_cast<Eigen::Index>(i)) = q.transpose() * path.tips[i];
+    motion.push_back(static_cast<double>(path.motion[i] == Motion::cut ? 0 : path.motion[i] == Motion::link ? 1 : 2));
+    pass.push_back(path.pass[i]);
+  }
+  // One polyline for the whole path: the order is the machining order.
+  std::vector<long long> line(path.size());
+  for (std::size_t i = 0; i < path.size(); ++i) line[i] = static_cast<long long>(i);
+  if (!line.empty()) p.lines.push_back(line);
+  p.fields.point_scalars = {{"motion", motion}, {"pass", pass}};
+  write_polylines_vtp(file, p);
+}
+
+nlohmann::json check_json(const PathCheck& c) {
+  return {{"positions", c.positions}, {"deepest_mm", c.deepest}, {"worst_tip_drop_frame", vec(c.worst)}, {"positions_over_tolerance", c.over}};
+}
+
+}  // namespace
+
+nlohmann::json run_copy(const CopyRunOptions& o) {
+  std::vector<std::string> overrides = o.overrides;
+  if (!o.tool.empty()) overrides.push_back("finishing.tool=\"" + o.tool + "\"");
+  if (!o.machine.empty()) overrides.push_back("machine.name=\"" + o.machine + "\"");
+  const CopySettings s = o.settings ? read_copy_settings(read_text(*o.settings), o.settings->string(), overrides) : read_copy_settings("", "<defaults>", overrides);
+  const machine::Machine m = machine::load_machine(s.machine, s.machine_overrides);
+  const machine::Kinematics kinematics(m);
+  const geometry::PointCloud cloud = geometry::read_cloud(o.cloud, s.scale);
+  const auto progress = [&](const std::string& line) {
+    if (!o.quiet) std::printf("  %s\n", line.c_str()), std::fflush(stdout);
+  };
+  const CopyResult r = copy_cloud(cloud, s, kinematics, progress);
+
+  std::filesystem::create_directories(o.out);
+  std::vector<std::string> files;
+  // The rows: points with a normal, their packet, how many directions see them, overlap.
+  {
+    geometry::PointCloud rows;
+    rows.origin = cloud.origin;
+    rows.points = r.row_points, rows.normals = r.row_normals;
+    const int n = static_cast<int>(rows.points.size());
+    std::vector<double> packet(static_cast<std::size_t>(n)), seen(static_cast<std::size_t>(n), 0), overlap(static_cast<std::size_t>(n)), hits(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      packet[k] = r.packets.packet_of[k];
+      overlap[k] = r.packets.overlap[k];
+      hits[k] = r.normals.hits.empty() ? 0 : r.normals.hits[k];
+      for (int j = 0; j < static_cast<int>(r.visibility.columns.size()); ++j) seen[k] += r.visibility.test(i, j);
+    }
+    geometry::write_ply(o.out / "normals.ply", rows, {{"packet", packet, true}, {"directions_seeing", seen, true}, {"overlap", overlap, true}, {"hits", hits, true}});
+    files.push_back("normals.ply");
+    Eigen::Matrix3Xd points(3, n);
+    Eigen::VectorXd normals(3 * n);
+    for (int i = 0; i < n; ++i) points.col(i) = rows.points[static_cast<std::size_t>(i)], normals.segment<3>(3 * i) = rows.normals[static_cast<std::size_t>(i)];
+    VtuFields f;
+    f.point_scalars = {{"packet", packet}, {"directions_seeing", seen}, {"overlap", overlap}};
+    f.point_vectors = {{"normal", normals}};
+    write_points_vtp(o.out / "packets.vtp", points, f);
+    files.push_back("packets.vtp");
+  }
+
+  nlohmann::json packets = nlohmann::json::array();
+  const auto sizes = r.packets.sizes();
+  for (std::size_t k = 0; k < r.plans.size(); ++k) {
+    const PacketPlan& p = r.plans[k];
+    const std::string dir = "packet_" + std::to_string(k + 1);
+    std::filesystem::create_directories(o.out / dir);
+    nlohmann::json j = {{"direction", p.direction},
+                        {"axis", vec(p.axis)},
+                        {"rotary_deg", {p.rotary.x(), p.rotary.y()}},
+                        {"points", sizes[k]}};
+    if (!p.error.empty()) j["error"] = p.error;
+    const auto op_json = [&](const PacketOperation& op, const std::string& name) {
+      nlohmann::json e = {{"path_points", op.path.size()},
+                          {"cutting_length_mm", op.path.cutting_length()},
+                          {"rapid_length_mm", op.path.rapid_length()},
+                          {"cycle_time_s", op.cycle_time},
+                          {"check", check_json(op.check)}};
+      if (!op.path.empty()) {
+        write_path_vtp(o.out / dir / (name + ".vtp"), op.path, p.frame);
+        write_file_atomically(o.out / dir / (name + "_cl.csv"), machine::cl_csv(op.cl));
+        files.push_back(dir + "/" + name + ".vtp"), files.push_back(dir + "/" + name + "_cl.csv");
+      }
+      if (!op.gcode.empty()) {
+        write_file_atomically(o.out / dir / (name + ".ngc"), op.gcode);
+        files.push_back(dir + "/" + name + ".ngc");
+      }
+      if (!op.error.empty()) e["post_processor_error"] = op.error;
+      return e;
+    };
+    if (p.finishing) {
+      const CloudFinishing& f = *p.finishing;
+      j["finishing"] = op_json(p.finish_op, "finishing");
+      j["finishing"].update({{"passes", f.passes},
+                             {"nodes", f.nodes},
+                             {"inserted_nodes", f.inserted},
+                             {"unresolved_chords", f.unresolved},
+                             {"unresolved_worst_mm", f.unresolved_worst},
+                             {"gaps", f.gaps},
+                             {"lifted_by_shank_or_holder", f.lifted},
+                             {"transverse_step_mm", {{"smallest", f.smallest_step}, {"mean", f.mean_step}, {"largest", f.largest_step}}}});
+    }
+    if (p.roughing) {
+      const CloudRoughing& g = *p.roughing;
+      j["roughing"] = op_json(p.rough_op, "roughing");
+      j["roughing"].update({{"layers", g.layers},
+                            {"nodes", g.nodes},
+                            {"cut", g.cut},
+                            {"blocked", g.blocked},
+                            {"unreachable", g.unreachable},
+                            {"side_entries", g.side_entries},
+                            {"ramps", g.ramps},
+                            {"zigzag_ramps", g.zigzag_ramps},
+                            {"voxels", g.voxels},
+                            {"voxel_mm", g.voxel}});
+    }
+    packets.push_back(j);
+  }
+
+  nlohmann::json times = nlohmann::json::array();
+  double wall = 0;
+  for (const auto& t : r.times) times.push_back({{"stage", t.stage}, {"wall_s", t.wall}, {"cpu_s", t.cpu}}), wall += t.wall;
+  nlohmann::json summary = {
+      {"command", "copy"},
+      {"cloud", o.cloud.string()},
+      {"settings", s.origin},
+      {"machine", {{"name", m.name}, {"kinematics", machine::chain_name(m.chain)}}},
+      {"cloud_points", r.cloud_points},
+      {"obstacle_points", r.obstacle_points},
+      {"stock", {{"lo", vec(r.stock.lo)}, {"hi", vec(r.stock.hi)}}},
+      {"normals", {{"from_file", r.normals_from_file}, {"points", r.row_points.size()}, {"pca_mean_disagreement_deg", r.pca_disagreement}}},
+      {"visibility",
+       {{"directions", r.visibility.columns.size()},
+        {"reachable_directions", std::count(r.visibility.reachable.begin(), r.visibility.reachable.end(), 1)},
+        {"tool_visible_bits", r.visibility.tool_visible},
+        {"cleared_by_collision", r.visibility.collisions}}},
+      {"grouping",
+       {{"method", r.packets.method},
+        {"packets", r.packets.directions.size()},
+        {"covered", r.packets.covered},
+        {"coverage", r.row_points.empty() ? 0.0 : static_cast<double>(r.packets.covered) / static_cast<double>(r.row_points.size())},
+        {"coverage_met", r.packets.coverage_met},
+        {"overlap_points", r.packets.overlaps},
+        {"reattached", r.packets.reattached},
+        {"unmachinable", r.packets.unmachinable},
+        {"combinations", r.packets.combinations}}},
+      {"packets", packets},
+      {"times", times},
+      {"wall_s", wall},
+      {"files", files},
+      {"machine_info", machine_info()}};
+  write_summary(o.out, summary);
+  return summary;
+}
+
+}  // namespace drom::paths

@@ -1,0 +1,48 @@
+#pragma once
+// The settings of `drom copy` (copying a scanned part by 3+2 machining of its cloud, Makki 2009): a
+// TOML file whose every key is checked like a case file's (support/toml_reader.hpp), with `--set`
+// overrides. Defaults are the seed's improved femur-head run (4-§4): sphere D7 launched along
+// +-X, +-Y, +Z on a 0.5 mm grid; 216 directions (10 x 30 degrees); the window [5, 85] degrees; a ball
+// D6 on a 53 mm holder 40 mm out, 0.2 mm steps; roughing with a flat D10, 3 x 3 x 2 mm; the
+// table-table UCP 710-like machine. Keys: docs/case-files.md ("drom copy").
+#include "paths/copy/cloud_finishing.hpp"
+#include "paths/copy/cloud_roughing.hpp"
+#include "paths/copy/packets.hpp"
+#include "paths/copy/sphere_normals.hpp"
+#include "paths/copy/visibility.hpp"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace drom::paths {
+
+struct CopySettings {
+  std::string origin;  // the settings file, or "<defaults>"
+  double scale = 1;    // every coordinate of the cloud multiplied by it
+  SphereLaunchSettings normals;
+  bool normals_from_file = false;  // a cloud that carries normals: use them for every point instead of launching spheres
+  VisibilitySettings visibility;  // its tool is the finishing tool, its machine set by the caller
+  PacketSettings packets;
+  CloudFinishingSettings finishing;
+  double finishing_feed = 2000;  // mm/min (the hip's finishing)
+  bool rough = true;
+  CloudRoughingSettings roughing;
+  double roughing_feed = 5000;   // mm/min
+  std::string machine = "ucp710_like";
+  std::vector<std::string> machine_overrides;
+  double spindle_speed = 15000;  // rev/min
+  std::optional<Eigen::Vector3d> stock_lo, stock_hi;  // part frame; none: the cloud's box grown by stock_margin
+  double stock_margin = 5;
+  bool stock_base_is_obstacle = true;  // the stock under the cloud's lowest point stays: the tool must not enter it
+  std::vector<Obstacle> fixtures;
+};
+
+// The defaults as a TOML text (every key, with comments).
+std::string default_copy_settings();
+
+// Reads `text` (a settings file; empty: the defaults) with `overrides` ("key=value"). Throws
+// InputError naming the origin, the line and the key.
+CopySettings read_copy_settings(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides = {});
+
+}  // namespace drom::paths
