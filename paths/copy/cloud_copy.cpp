@@ -69,18 +69,10 @@ void make_program(PacketOperation& op, const CloudPath& path, const Eigen::Matri
   }
 }
 
-}  // namespace
+using Say = std::function<void(const std::string&)>;
 
-CopyResult copy_cloud(const geometry::PointCloud& cloud, const CopySettings& s, const machine::Kinematics& kin, const std::function<void(const std::string&)>& progress) {
-  const auto say = [&](const std::string& line) {
-    if (progress) progress(line);
-  };
-  CopyResult out;
-  Stopwatch watch(out.times);
-  out.cloud_points = cloud.size();
-  out.cloud_box = geometry::bounding_box(cloud.points);
-
-  // 1. Normals: the cloud's own, or by sphere launching (and the PCA estimate beside them).
+// Stage 1: normals, the cloud's own or by sphere launching (and the PCA estimate beside them).
+void find_normals(const geometry::PointCloud& cloud, const CopySettings& s, CopyResult& out, const Say& say) {
   if (s.normals_from_file) {
     if (!cloud.has_normals()) throw InputError(cloud.origin + ": normals.from_file is set but the cloud carries no normals (PLY nx, ny, nz or XYZ columns 4-6)");
     out.normals_from_file = true;
@@ -88,21 +80,23 @@ CopyResult copy_cloud(const geometry::PointCloud& cloud, const CopySettings& s, 
     out.row_normals = cloud.normals;
     for (std::size_t i = 0; i < cloud.size(); ++i) out.normals.points.push_back(static_cast<int>(i)), out.normals.hits.push_back(0);
     out.normals.normals = cloud.normals;
-  } else {
-    say("normals: spheres of D" + std::to_string(s.normals.diameter) + " launched along " + std::to_string(s.normals.directions.size()) + " directions");
-    out.normals = launch_spheres(cloud.points, s.normals);
-    if (out.normals.points.empty()) throw InputError(cloud.origin + ": no sphere landed on the cloud: no normal, nothing to machine (check the sphere diameter and grid step)");
-    for (std::size_t k = 0; k < out.normals.points.size(); ++k) out.row_points.push_back(cloud.points[static_cast<std::size_t>(out.normals.points[k])]);
-    out.row_normals = out.normals.normals;
-    std::vector<Eigen::Vector3d> pca = pca_normals(cloud.points, out.normals.points, 16);
-    orient_like(cloud.points, out.normals.points, pca, out.normals);
-    double sum = 0;
-    for (std::size_t k = 0; k < pca.size(); ++k) sum += angle_between(pca[k], out.normals.normals[k]);
-    out.pca_disagreement = sum / static_cast<double>(pca.size()) * 180 / std::numbers::pi;
+    return;
   }
-  watch.stage("normals");
+  say("normals: spheres of D" + std::to_string(s.normals.diameter) + " launched along " + std::to_string(s.normals.directions.size()) + " directions");
+  out.normals = launch_spheres(cloud.points, s.normals);
+  if (out.normals.points.empty()) throw InputError(cloud.origin + ": no sphere landed on the cloud: no normal, nothing to machine (check the sphere diameter and grid step)");
+  for (std::size_t k = 0; k < out.normals.points.size(); ++k) out.row_points.push_back(cloud.points[static_cast<std::size_t>(out.normals.points[k])]);
+  out.row_normals = out.normals.normals;
+  std::vector<Eigen::Vector3d> pca = pca_normals(cloud.points, out.normals.points, 16);
+  orient_like(cloud.points, out.normals.points, pca, out.normals);
+  double sum = 0;
+  for (std::size_t k = 0; k < pca.size(); ++k) sum += angle_between(pca[k], out.normals.normals[k]);
+  out.pca_disagreement = sum / static_cast<double>(pca.size()) * 180 / std::numbers::pi;
+}
 
-  // 2. The obstacles: the stock's base under the cloud (it stays), and the fixtures.
+// Stage 2: the obstacles (the stock's base under the cloud, which stays, and the fixtures) sampled
+// beside the cloud: every point the tool must not enter.
+std::vector<Eigen::Vector3d> collision_points(const geometry::PointCloud& cloud, const CopySettings& s, CopyResult& out) {
   geometry::Box3 stock;
   if (s.stock_lo) stock.lo = *s.stock_lo, stock.hi = *s.stock_hi;
   else stock.lo = out.cloud_box.lo - Eigen::Vector3d::Constant(s.stock_margin), stock.hi = out.cloud_box.hi + Eigen::Vector3d::Constant(s.stock_margin);
@@ -121,17 +115,21 @@ CopyResult copy_cloud(const geometry::PointCloud& cloud, const CopySettings& s, 
     collision.insert(collision.end(), surface.begin(), surface.end());
   }
   out.obstacle_points = collision.size() - cloud.size();
+  return collision;
+}
 
-  // 3. Visibility.
+// Stage 3: which directions the machine reaches see each point with the whole tool.
+void compute_visibility(const std::vector<Eigen::Vector3d>& collision, const CopySettings& s, const machine::Kinematics& kin, CopyResult& out, const Say& say) {
   say("visibility: " + std::to_string(out.row_points.size()) + " points x the (" + std::to_string(static_cast<int>(s.visibility.phi_step)) + ", " +
       std::to_string(static_cast<int>(s.visibility.theta_step)) + ") degree grid");
   VisibilitySettings vis = s.visibility;
   vis.tool = s.finishing.tool;
   vis.machine = &kin;
   out.visibility = visibility_matrix(collision, out.row_points, out.row_normals, vis);
-  watch.stage("visibility");
+}
 
-  // 4. Packets; a leftover joins a packet whose direction reaches it with the whole window.
+// Stage 4: packets; a leftover joins a packet whose direction reaches it with the whole window.
+void choose_packets(const geometry::PointCloud& cloud, const std::vector<Eigen::Vector3d>& collision, const CopySettings& s, CopyResult& out, const Say& say) {
   std::map<int, std::unique_ptr<BodyCheck>> bodies;
   std::mutex body_lock;
   const auto reaches = [&](int i, int j) {
@@ -152,58 +150,84 @@ CopyResult copy_cloud(const geometry::PointCloud& cloud, const CopySettings& s, 
   if (out.packets.directions.empty()) throw InputError(cloud.origin + ": no direction the machine reaches sees any point of the cloud (" + out.packets.method + ")");
   say("packets: " + std::to_string(out.packets.directions.size()) + " (" + out.packets.method + "), " + std::to_string(out.packets.covered) + " of " +
       std::to_string(out.row_points.size()) + " points covered");
-  watch.stage("packets");
+}
 
-  // 5. Per packet: its drop frame, roughing, finishing, programs and checks.
+// What stage 5 plans each packet against.
+struct PacketInputs {
+  const std::vector<Eigen::Vector3d>& collision;
+  const geometry::CloudVoxelMap* map;  // roughing's, when it is on
+  const CopySettings& settings;
+  const machine::Kinematics& kin;
+};
+
+// Stage 5, one packet: its drop frame, roughing, finishing, programs and checks.
+PacketPlan plan_packet(std::size_t k, const CopyResult& out, const PacketInputs& in, Stopwatch& watch, const Say& say) {
+  const CopySettings& s = in.settings;
+  PacketPlan plan;
+  plan.direction = out.packets.directions[k];
+  plan.axis = out.visibility.directions.unit[static_cast<std::size_t>(plan.direction)];
+  plan.rotary = out.visibility.rotary[static_cast<std::size_t>(plan.direction)];
+  plan.frame = geometry::frame_along(plan.axis);
+  plan.points = out.packets.sizes()[k];
+  std::vector<Eigen::Vector3d> mine;
+  for (std::size_t i = 0; i < out.row_points.size(); ++i)
+    if (out.packets.packet_of[i] == static_cast<int>(k)) mine.push_back(plan.frame * out.row_points[i]);
+  const geometry::CloudBins bins(geometry::rotated(in.collision, plan.frame), std::max(0.25, s.finishing.tool.cutter.radius / 2));
+  watch.add_to("finishing");
+  const std::string name = "packet " + std::to_string(k + 1);
+  say(name + ": axis (" + std::to_string(plan.axis.x()).substr(0, 6) + ", " + std::to_string(plan.axis.y()).substr(0, 6) + ", " + std::to_string(plan.axis.z()).substr(0, 6) +
+      "), " + std::to_string(plan.points) + " points");
+  if (mine.empty()) {
+    plan.error = "no point";
+    return plan;
+  }
+  if (s.rough) {
+    const CloudArea area(mine, s.roughing.longitudinal_step, s.roughing.tool.cutter.radius + s.stock_margin);
+    double bottom = 1e300;
+    for (const auto& p : mine) bottom = std::min(bottom, p.z());
+    plan.roughing = plan_cloud_roughing(*in.map, plan.frame, out.stock, area, bottom, s.roughing);
+    // The program (post-processing and feed prediction, one thread) and the whole-tool check (many)
+    // read the same path: side by side.
+    tbb::parallel_invoke([&] { make_program(plan.rough_op, plan.roughing->path, plan.frame, s.roughing_feed, name + " roughing", 2, s, in.kin); },
+                         [&] { plan.rough_op.check = check_path(bins, plan.roughing->path, s.roughing.tool, s.roughing.tool.cutter.radius / 4, 0); });
+    watch.add_to("roughing");
+  }
+  try {
+    const CloudArea area(mine, std::max(s.finishing.longitudinal_step, s.normals.grid_step), s.finishing.tool.cutter.radius);
+    plan.finishing = plan_cloud_finishing(bins, area, s.finishing);
+    tbb::parallel_invoke([&] { make_program(plan.finish_op, plan.finishing->path, plan.frame, s.finishing_feed, name + " finishing", 1, s, in.kin); },
+                         [&] {
+                           plan.finish_op.check =
+                               check_path(bins, plan.finishing->path, s.finishing.tool, std::max(0.05, s.finishing.longitudinal_step / 2), s.finishing.chord_tolerance);
+                         });
+  } catch (const InputError& e) {
+    plan.error = e.what();
+  }
+  watch.add_to("finishing");
+  return plan;
+}
+
+}  // namespace
+
+CopyResult copy_cloud(const geometry::PointCloud& cloud, const CopySettings& s, const machine::Kinematics& kin, const std::function<void(const std::string&)>& progress) {
+  const Say say = [&](const std::string& line) {
+    if (progress) progress(line);
+  };
+  CopyResult out;
+  Stopwatch watch(out.times);
+  out.cloud_points = cloud.size();
+  out.cloud_box = geometry::bounding_box(cloud.points);
+  find_normals(cloud, s, out, say);
+  watch.stage("normals");
+  const std::vector<Eigen::Vector3d> collision = collision_points(cloud, s, out);
+  compute_visibility(collision, s, kin, out, say);
+  watch.stage("visibility");
+  choose_packets(cloud, collision, s, out, say);
+  watch.stage("packets");
   std::optional<geometry::CloudVoxelMap> map;
   if (s.rough) map.emplace(collision, roughing_voxel(s.roughing));  // the obstacles too: roughing must not enter the base or a fixture
   watch.add_to("roughing");
-  const auto sizes = out.packets.sizes();
-  for (std::size_t k = 0; k < out.packets.directions.size(); ++k) {
-    PacketPlan plan;
-    plan.direction = out.packets.directions[k];
-    plan.axis = out.visibility.directions.unit[static_cast<std::size_t>(plan.direction)];
-    plan.rotary = out.visibility.rotary[static_cast<std::size_t>(plan.direction)];
-    plan.frame = geometry::frame_along(plan.axis);
-    plan.points = sizes[k];
-    std::vector<Eigen::Vector3d> mine;
-    for (std::size_t i = 0; i < out.row_points.size(); ++i)
-      if (out.packets.packet_of[i] == static_cast<int>(k)) mine.push_back(plan.frame * out.row_points[i]);
-    const geometry::CloudBins bins(geometry::rotated(collision, plan.frame), std::max(0.25, s.finishing.tool.cutter.radius / 2));
-    watch.add_to("finishing");
-    const std::string name = "packet " + std::to_string(k + 1);
-    say(name + ": axis (" + std::to_string(plan.axis.x()).substr(0, 6) + ", " + std::to_string(plan.axis.y()).substr(0, 6) + ", " + std::to_string(plan.axis.z()).substr(0, 6) +
-        "), " + std::to_string(plan.points) + " points");
-    if (mine.empty()) {
-      plan.error = "no point";
-      out.plans.push_back(std::move(plan));
-      continue;
-    }
-    if (s.rough) {
-      const CloudArea area(mine, s.roughing.longitudinal_step, s.roughing.tool.cutter.radius + s.stock_margin);
-      double bottom = 1e300;
-      for (const auto& p : mine) bottom = std::min(bottom, p.z());
-      plan.roughing = plan_cloud_roughing(*map, plan.frame, stock, area, bottom, s.roughing);
-      // The program (post-processing and feed prediction, one thread) and the whole-tool check (many)
-      // read the same path: side by side.
-      tbb::parallel_invoke([&] { make_program(plan.rough_op, plan.roughing->path, plan.frame, s.roughing_feed, name + " roughing", 2, s, kin); },
-                           [&] { plan.rough_op.check = check_path(bins, plan.roughing->path, s.roughing.tool, s.roughing.tool.cutter.radius / 4, 0); });
-      watch.add_to("roughing");
-    }
-    try {
-      const CloudArea area(mine, std::max(s.finishing.longitudinal_step, s.normals.grid_step), s.finishing.tool.cutter.radius);
-      plan.finishing = plan_cloud_finishing(bins, area, s.finishing);
-      tbb::parallel_invoke([&] { make_program(plan.finish_op, plan.finishing->path, plan.frame, s.finishing_feed, name + " finishing", 1, s, kin); },
-                           [&] {
-                             plan.finish_op.check =
-                                 check_path(bins, plan.finishing->path, s.finishing.tool, std::max(0.05, s.finishing.longitudinal_step / 2), s.finishing.chord_tolerance);
-                           });
-    } catch (const InputError& e) {
-      plan.error = e.what();
-    }
-    watch.add_to("finishing");
-    out.plans.push_back(std::move(plan));
-  }
+  for (std::size_t k = 0; k < out.packets.directions.size(); ++k) out.plans.push_back(plan_packet(k, out, {collision, map ? &*map : nullptr, s, kin}, watch, say));
   return out;
 }
 

@@ -79,72 +79,114 @@ double traverse_height(const geometry::CloudBins& bins, const ToolAssembly& tool
   return std::isfinite(top) ? top + clearance : clearance;
 }
 
-CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const CloudArea& area, const CloudFinishingSettings& s) {
-  const Tool& cutter = s.tool.cutter;
-  if (!(cutter.radius > 0) || !(s.longitudinal_step > 0) || !(s.chord_tolerance > 0) || !(s.scallop > 0))
-    throw std::invalid_argument("cloud finishing: the tool radius, longitudinal step, chord tolerance and scallop must be positive");
-  if (s.transverse == TransverseStep::fixed && !(s.transverse_step > 0)) throw std::invalid_argument("cloud finishing: a fixed transverse step must be positive");
-  if (area.empty()) throw InputError("cloud finishing: the area to finish is empty");
-  const double check = s.check_spacing > 0 ? s.check_spacing : s.longitudinal_step / 2;
-  const double level_step = level_ground_spacing(cutter, s.scallop);
-  const double smallest = s.smallest_step > 0 ? s.smallest_step : 0.05 * level_step;
-  const double longest_link = s.longest_link > 0 ? s.longest_link : std::max(2.0, 5 * level_step);
-  const double steepest = std::cos(s.steepest * std::numbers::pi / 180);
-  const double steepest_slope = s.steepest < 90 ? std::tan(s.steepest * std::numbers::pi / 180) : kInfinity;
-  const double shortest = s.shortest_move > 0 ? s.shortest_move : s.longitudinal_step / 16;
+namespace {
 
-  CloudFinishing out;
-  // The base grid along X.
-  const int columns = static_cast<int>(std::ceil((area.x_max() - area.x_min()) / s.longitudinal_step)) + 1;
-  const auto drop_row = [&](double y) {
-    Row row;
-    row.y = y;
-    row.nodes.resize(static_cast<std::size_t>(columns));
-    tbb::parallel_for(0, columns, [&](int k) {
-      Node& n = row.nodes[static_cast<std::size_t>(k)];
-      n.x = area.x_min() + k * s.longitudinal_step, n.y = y;
-      n.inside = area.contains(n.x, n.y);
-      if (n.inside) n.drop = drop_assembly(bins, n.x, n.y, s.tool);
-    });
-    return row;
-  };
-  // The step a row allows towards the next, with the centres' concave curvature across from the rows
-  // before and after it where they are known.
-  const auto allowed = [&](const Row& row, const Row* before, const Row* after) {
-    if (s.transverse == TransverseStep::fixed) return s.transverse_step;
-    if (s.transverse == TransverseStep::seed_45) {
-      const Eigen::Vector3d at_45(0, -std::sqrt(0.5), std::sqrt(0.5));
-      return std::min(level_step, transverse_spacing(cutter, s.scallop, at_45));
-    }
-    double step = level_step;
-    for (std::size_t k = 0; k < row.nodes.size(); ++k) {
-      const Node& n = row.nodes[k];
-      if (!n.cuttable() || n.drop.lifted || n.drop.normal.z() < steepest) continue;
-      double curvature = 0;
-      if (before && after && before->nodes[k].cuttable() && after->nodes[k].cuttable() && cutter.kind == ToolKind::ball) {
-        const double h1 = row.y - before->y, h2 = after->y - row.y;
-        const double z0 = before->nodes[k].drop.tip, z1 = n.drop.tip, z2 = after->nodes[k].drop.tip;
-        const double second = 2 * ((z2 - z1) / h2 - (z1 - z0) / h1) / (h1 + h2), m = (z2 - z0) / (h1 + h2);
-        curvature = second / std::pow(1 + m * m, 1.5);
-      }
-      step = std::min(step, transverse_spacing(cutter, s.scallop, n.drop.normal, curvature));
-    }
-    return step;
-  };
+// A move the chord tests could not resolve further (noise finer than the tolerance), counted.
+struct Unresolved {
+  long long count = 0;
+  double worst = 0;
+};
 
-  // 1. The passes, placed one after the other.
+// A run of consecutive cuttable nodes of one pass, with the nodes the chord tests inserted.
+struct Segment {
+  std::vector<Node> nodes;
+  // Per node k > 0: the height the move from node k - 1 goes round the corner at, or NaN when it
+  // goes straight.
+  std::vector<double> round_at;
+  long long inserted = 0;
+  Unresolved unresolved;
+};
+
+// Where the chord tests along a move go, and what error they may allow.
+struct ChordTests {
+  double spacing, tolerance;
+};
+
+// The planner's stages over one cloud, one area and one set of settings, with the settings' derived
+// values computed once: place the passes, count what lies under them, cut them into segments refined
+// by the chord test, join the segments into a program.
+class CloudFinishingPlanner {
+ public:
+  CloudFinishingPlanner(const geometry::CloudBins& bins, const CloudArea& area, const CloudFinishingSettings& s)
+      : bins_(bins), area_(area), s_(s), cutter_(s.tool.cutter), check_(s.check_spacing > 0 ? s.check_spacing : s.longitudinal_step / 2),
+        level_step_(level_ground_spacing(cutter_, s.scallop)), smallest_(s.smallest_step > 0 ? s.smallest_step : 0.05 * level_step_),
+        longest_link_(s.longest_link > 0 ? s.longest_link : std::max(2.0, 5 * level_step_)), steepest_(std::cos(s.steepest * std::numbers::pi / 180)),
+        steepest_slope_(s.steepest < 90 ? std::tan(s.steepest * std::numbers::pi / 180) : kInfinity),
+        shortest_(s.shortest_move > 0 ? s.shortest_move : s.longitudinal_step / 16), least_cos_(std::max(0.1, steepest_)),
+        columns_(static_cast<int>(std::ceil((area.x_max() - area.x_min()) / s.longitudinal_step)) + 1) {}
+
+  std::vector<Row> place_passes() const;
+  void count_nodes(const std::vector<Row>& rows, CloudFinishing& out) const;
+  std::vector<std::vector<Segment>> cut_segments(const std::vector<Row>& rows) const;
+  void join_segments(const std::vector<Row>& rows, const std::vector<std::vector<Segment>>& segments, CloudFinishing& out) const;
+
+ private:
+  Row drop_row(double y) const;
+  double allowed(const Row& row, const Row* before, const Row* after) const;
+  ChordTests chord_tests(const Node& a, const Node& b) const;
+  void refine(const Node& a, const Node& b, std::vector<Node>& into, long long& inserted, Unresolved& unresolved, int depth) const;
+  double round_the_corner_at(const Node& a, const Node& n) const;
+  bool link_is_safe(const Node& a, const Node& b) const;
+
+  const geometry::CloudBins& bins_;
+  const CloudArea& area_;
+  const CloudFinishingSettings& s_;
+  const Tool& cutter_;
+  const double check_, level_step_, smallest_, longest_link_, steepest_, steepest_slope_, shortest_, least_cos_;
+  const int columns_;  // the base grid along X
+};
+
+Row CloudFinishingPlanner::drop_row(double y) const {
+  Row row;
+  row.y = y;
+  row.nodes.resize(static_cast<std::size_t>(columns_));
+  tbb::parallel_for(0, columns_, [&](int k) {
+    Node& n = row.nodes[static_cast<std::size_t>(k)];
+    n.x = area_.x_min() + k * s_.longitudinal_step, n.y = y;
+    n.inside = area_.contains(n.x, n.y);
+    if (n.inside) n.drop = drop_assembly(bins_, n.x, n.y, s_.tool);
+  });
+  return row;
+}
+
+// The step a row allows towards the next, with the centres' concave curvature across from the rows
+// before and after it where they are known.
+double CloudFinishingPlanner::allowed(const Row& row, const Row* before, const Row* after) const {
+  if (s_.transverse == TransverseStep::fixed) return s_.transverse_step;
+  if (s_.transverse == TransverseStep::seed_45) {
+    const Eigen::Vector3d at_45(0, -std::sqrt(0.5), std::sqrt(0.5));
+    return std::min(level_step_, transverse_spacing(cutter_, s_.scallop, at_45));
+  }
+  double step = level_step_;
+  for (std::size_t k = 0; k < row.nodes.size(); ++k) {
+    const Node& n = row.nodes[k];
+    if (!n.cuttable() || n.drop.lifted || n.drop.normal.z() < steepest_) continue;
+    double curvature = 0;
+    if (before && after && before->nodes[k].cuttable() && after->nodes[k].cuttable() && cutter_.kind == ToolKind::ball) {
+      const double h1 = row.y - before->y, h2 = after->y - row.y;
+      const double z0 = before->nodes[k].drop.tip, z1 = n.drop.tip, z2 = after->nodes[k].drop.tip;
+      const double second = 2 * ((z2 - z1) / h2 - (z1 - z0) / h1) / (h1 + h2), m = (z2 - z0) / (h1 + h2);
+      curvature = second / std::pow(1 + m * m, 1.5);
+    }
+    step = std::min(step, transverse_spacing(cutter_, s_.scallop, n.drop.normal, curvature));
+  }
+  return step;
+}
+
+// Stage 1: the passes, placed one after the other.
+std::vector<Row> CloudFinishingPlanner::place_passes() const {
   std::vector<Row> rows;
-  rows.push_back(drop_row(area.y_min()));
-  while (rows.back().y < area.y_max() - 1e-9) {
+  rows.push_back(drop_row(area_.y_min()));
+  while (rows.back().y < area_.y_max() - 1e-9) {
     const Row& current = rows.back();
     const Row* before = rows.size() >= 2 ? &rows[rows.size() - 2] : nullptr;
-    double step = std::max(allowed(current, before, nullptr), smallest);
-    double y = std::min(area.y_max(), current.y + step);
+    double step = std::max(allowed(current, before, nullptr), smallest_);
+    double y = std::min(area_.y_max(), current.y + step);
     Row next = drop_row(y);
-    if (s.transverse == TransverseStep::adaptive) {
+    if (s_.transverse == TransverseStep::adaptive) {
       // The next row's own contacts, and the curvature the rows around the current one show, may ask for less.
       for (int iteration = 0; iteration < 4; ++iteration) {
-        const double wanted = std::max(std::min(allowed(current, before, &next), allowed(next, nullptr, nullptr)), smallest);
+        const double wanted = std::max(std::min(allowed(current, before, &next), allowed(next, nullptr, nullptr)), smallest_);
         if (wanted >= (y - current.y) * (1 - 1e-9)) break;
         y = current.y + wanted;
         next = drop_row(y);
@@ -152,6 +194,12 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
     }
     rows.push_back(std::move(next));
   }
+  return rows;
+}
+
+// Stage 2: what lies under the passes (gaps, lifted nodes, contacts too steep or beyond the bound),
+// and the steps between them. No point under the whole area is the user's error.
+void CloudFinishingPlanner::count_nodes(const std::vector<Row>& rows, CloudFinishing& out) const {
   for (const Row& row : rows)
     for (const Node& n : row.nodes) {
       if (!n.inside) continue;
@@ -160,16 +208,16 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
       if (!n.drop.contact) {
         ++out.gaps;
         out.gap_nodes.emplace_back(n.x, n.y);
-      } else if (n.drop.normal.z() < steepest) {
+      } else if (n.drop.normal.z() < steepest_) {
         ++out.steeper;
-      } else if (s.transverse == TransverseStep::adaptive && !n.drop.lifted && transverse_spacing(cutter, s.scallop, n.drop.normal) < smallest) {
+      } else if (s_.transverse == TransverseStep::adaptive && !n.drop.lifted && transverse_spacing(cutter_, s_.scallop, n.drop.normal) < smallest_) {
         ++out.below_bound;
       }
     }
   if (out.nodes == out.gaps) {
     std::ostringstream m;
-    m << "cloud finishing: no point of the cloud lies under the area asked for (x in [" << area.x_min() << ", " << area.x_max() << "], y in [" << area.y_min() << ", "
-      << area.y_max() << "] of the drop frame, " << out.nodes << " nodes)";
+    m << "cloud finishing: no point of the cloud lies under the area asked for (x in [" << area_.x_min() << ", " << area_.x_max() << "], y in [" << area_.y_min()
+      << ", " << area_.y_max() << "] of the drop frame, " << out.nodes << " nodes)";
     throw InputError(m.str());
   }
   out.passes = static_cast<int>(rows.size());
@@ -181,111 +229,98 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
     out.largest_step = std::max(out.largest_step, step);
     out.mean_step += step / static_cast<double>(rows.size() - 1);
   }
+}
 
-  // 2. Each pass cut into segments of consecutive cuttable nodes, and nodes inserted where a move
-  //    strays from the dropped height by more than Tu (in parallel over the passes).
-  struct Unresolved {
-    long long count = 0;
+// Over one of the points it touches, the cutter's dropped tip follows a sphere of the corner radius r;
+// a straight move between two tests h apart sags below such a sphere by up to h^2 / (8 r cos^3 θ)
+// vertically (θ its slope), which the tests do not see. The tests are placed so that this sag is at
+// most a quarter of Tu, and the error they see is held to what is left. A flat end mill's envelope has
+// steps, not a curvature: there, the tests keep the given spacing and the whole of Tu. The bound is not
+// kept where it would ask for tests closer than half the shortest move, or on contacts steeper than
+// `steepest` (θ is taken no steeper): there the tests still hold a quarter of Tu.
+ChordTests CloudFinishingPlanner::chord_tests(const Node& a, const Node& b) const {
+  const double r = cutter_.corner_radius;
+  if (!(r > 0)) return {check_, s_.chord_tolerance};
+  const double run = std::hypot(b.x - a.x, b.y - a.y);
+  const double chord_cos = run > 0 ? run / std::hypot(run, b.drop.tip - a.drop.tip) : 1.0;
+  const double c = std::clamp(std::min({chord_cos, std::abs(a.drop.normal.z()), std::abs(b.drop.normal.z())}), least_cos_, 1.0);
+  const double spacing = std::min(check_, std::max(0.5 * shortest_, std::sqrt(2 * r * s_.chord_tolerance * c * c * c)));
+  return {spacing, std::max(0.25 * s_.chord_tolerance, s_.chord_tolerance - spacing * spacing / (8 * r * c * c * c))};
+}
+
+// Nodes inserted between a and b where the straight move strays from the dropped height by more than
+// the chord tests allow, recursively at the worst test point.
+void CloudFinishingPlanner::refine(const Node& a, const Node& b, std::vector<Node>& into, long long& inserted, Unresolved& unresolved, int depth) const {
+  const double length = std::abs(b.x - a.x);
+  const ChordTests tests = chord_tests(a, b);
+  // At least the middle, however short the move, down to the shortest move allowed.
+  const int samples = std::max(1, static_cast<int>(std::ceil(length / tests.spacing)) - 1);
+  if (length > shortest_ && depth < 40) {
     double worst = 0;
-  };
-  struct Segment {
-    std::vector<Node> nodes;
-    // Per node k > 0: the height the move from node k - 1 goes round the corner at, or NaN when it
-    // goes straight.
-    std::vector<double> round_at;
-    long long inserted = 0;
-    Unresolved unresolved;
-  };
+    Node worst_node;
+    for (int i = 1; i <= samples; ++i) {
+      const double t = static_cast<double>(i) / (samples + 1);
+      Node m;
+      m.x = a.x + t * (b.x - a.x), m.y = a.y, m.inside = true;
+      m.drop = drop_assembly(bins_, m.x, m.y, s_.tool);
+      if (!std::isfinite(m.drop.tip)) continue;  // nothing under the whole assembly: nothing to hit
+      const double error = std::abs(a.drop.tip + t * (b.drop.tip - a.drop.tip) - m.drop.tip);
+      if (error > worst) worst = error, worst_node = m;
+    }
+    if (worst > tests.tolerance) {
+      ++inserted;
+      refine(a, worst_node, into, inserted, unresolved, depth + 1);
+      into.push_back(worst_node);
+      refine(worst_node, b, into, inserted, unresolved, depth + 1);
+      return;
+    }
+  } else if (depth > 0) {
+    // Too short to split again: how far it still strays (noise finer than the tolerance).
+    Node m;
+    m.x = 0.5 * (a.x + b.x), m.y = a.y, m.inside = true;
+    m.drop = drop_assembly(bins_, m.x, m.y, s_.tool);
+    if (std::isfinite(m.drop.tip)) {
+      const double error = std::abs(0.5 * (a.drop.tip + b.drop.tip) - m.drop.tip);
+      if (error > s_.chord_tolerance) {
+        ++unresolved.count;
+        unresolved.worst = std::max(unresolved.worst, error);
+      }
+    }
+  }
+}
+
+// A move the chord test could not resolve (a wall, a step in the dropped height: no node insertion
+// makes the straight move clear it) goes round the corner instead: up at the lower end to the highest
+// drop along it, across, down. NaN: the move goes straight.
+double CloudFinishingPlanner::round_the_corner_at(const Node& a, const Node& n) const {
+  double highest = std::max(a.drop.tip, n.drop.tip);
+  // A move steeper than any contact the passes follow: on a steep flank the sag bound of the chord
+  // tests no longer holds (the slope enters it cubed), and a move the chord test left as short as it
+  // goes crosses a step in the dropped height (a wall, the cloud's edge seen from beside) that no
+  // sample need fall on. Such a move is looked at closely, held to Tu, and one as short as it goes is
+  // never fed straight.
+  const double run = std::abs(n.x - a.x);
+  const bool steep = std::abs(n.drop.tip - a.drop.tip) > run * steepest_slope_;
+  bool straight = !(steep && run <= shortest_ * (1 + 1e-9));
+  const int samples = steep ? 16 : 4;
+  // Elsewhere, well beyond the tolerance only: a resolved move may stray by about Tu between the
+  // points the chord test looked at.
+  const double allowance = steep ? s_.chord_tolerance : 4 * s_.chord_tolerance;
+  for (int i = 1; i < samples; ++i) {
+    const double t = static_cast<double>(i) / samples;
+    const double d = drop_assembly(bins_, a.x + t * (n.x - a.x), a.y + t * (n.y - a.y), s_.tool).tip;
+    highest = std::max(highest, d);
+    if (d > a.drop.tip + t * (n.drop.tip - a.drop.tip) + allowance) straight = false;
+  }
+  return straight ? std::numeric_limits<double>::quiet_NaN() : highest;
+}
+
+// Stage 3: each pass cut into segments of consecutive cuttable nodes, nodes inserted where a move
+// strays from the dropped height by more than Tu (in parallel over the passes).
+std::vector<std::vector<Segment>> CloudFinishingPlanner::cut_segments(const std::vector<Row>& rows) const {
   std::vector<std::vector<Segment>> segments(rows.size());
-  // Where the chord tests along a move a -> b go, and what error they may allow. Over one of the
-  // points it touches, the cutter's dropped tip follows a sphere of the corner radius r; a straight
-  // move between two tests h apart sags below such a sphere by up to h^2 / (8 r cos^3 θ) vertically
-  // (θ its slope), which the tests do not see. The tests are placed so that this sag is at most a
-  // quarter of Tu, and the error they see is held to what is left. A flat end mill's envelope has
-  // steps, not a curvature: there, the tests keep the given spacing and the whole of Tu. The bound is
-  // not kept where it would ask for tests closer than half the shortest move, or on contacts steeper
-  // than `steepest` (θ is taken no steeper): there the tests still hold a quarter of Tu.
-  struct ChordTests {
-    double spacing, tolerance;
-  };
-  const double least_cos = std::max(0.1, steepest);
-  const auto chord_tests = [&](const Node& a, const Node& b) -> ChordTests {
-    const double r = cutter.corner_radius;
-    if (!(r > 0)) return {check, s.chord_tolerance};
-    const double run = std::hypot(b.x - a.x, b.y - a.y);
-    const double chord_cos = run > 0 ? run / std::hypot(run, b.drop.tip - a.drop.tip) : 1.0;
-    const double c = std::clamp(std::min({chord_cos, std::abs(a.drop.normal.z()), std::abs(b.drop.normal.z())}), least_cos, 1.0);
-    const double spacing = std::min(check, std::max(0.5 * shortest, std::sqrt(2 * r * s.chord_tolerance * c * c * c)));
-    return {spacing, std::max(0.25 * s.chord_tolerance, s.chord_tolerance - spacing * spacing / (8 * r * c * c * c))};
-  };
-  const auto refine = [&](const Node& a, const Node& b, std::vector<Node>& into, long long& inserted, Unresolved& unresolved, auto& self, int depth) -> void {
-    const double length = std::abs(b.x - a.x);
-    const ChordTests tests = chord_tests(a, b);
-    // At least the middle, however short the move, down to the shortest move allowed.
-    const int samples = std::max(1, static_cast<int>(std::ceil(length / tests.spacing)) - 1);
-    if (length > shortest && depth < 40) {
-      double worst = 0;
-      Node worst_node;
-      for (int i = 1; i <= samples; ++i) {
-        const double t = static_cast<double>(i) / (samples + 1);
-        Node m;
-        m.x = a.x + t * (b.x - a.x), m.y = a.y, m.inside = true;
-        m.drop = drop_assembly(bins, m.x, m.y, s.tool);
-        if (!std::isfinite(m.drop.tip)) continue;  // nothing under the whole assembly: nothing to hit
-        const double error = std::abs(a.drop.tip + t * (b.drop.tip - a.drop.tip) - m.drop.tip);
-        if (error > worst) worst = error, worst_node = m;
-      }
-      if (worst > tests.tolerance) {
-        ++inserted;
-        self(a, worst_node, into, inserted, unresolved, self, depth + 1);
-        into.push_back(worst_node);
-        self(worst_node, b, into, inserted, unresolved, self, depth + 1);
-        return;
-      }
-    } else if (depth > 0) {
-      // Too short to split again: how far it still strays (noise finer than the tolerance).
-      const Node m = [&] {
-        Node mid;
-        mid.x = 0.5 * (a.x + b.x), mid.y = a.y, mid.inside = true;
-        mid.drop = drop_assembly(bins, mid.x, mid.y, s.tool);
-        return mid;
-      }();
-      if (std::isfinite(m.drop.tip)) {
-        const double error = std::abs(0.5 * (a.drop.tip + b.drop.tip) - m.drop.tip);
-        if (error > s.chord_tolerance) {
-          ++unresolved.count;
-          unresolved.worst = std::max(unresolved.worst, error);
-        }
-      }
-    }
-  };
-  // A move the chord test could not resolve (a wall, a step in the dropped height: no node insertion
-  // makes the straight move clear it) goes round the corner instead: up at the lower end to the
-  // highest drop along it, across, down.
-  const auto round_the_corner_at = [&](const Node& a, const Node& n) {
-    double highest = std::max(a.drop.tip, n.drop.tip);
-    // A move steeper than any contact the passes follow: on a steep flank the sag bound of the
-    // chord tests no longer holds (the slope enters it cubed), and a move the chord test left as
-    // short as it goes crosses a step in the dropped height (a wall, the cloud's edge seen from
-    // beside) that no sample need fall on. Such a move is looked at closely, held to Tu, and one
-    // as short as it goes is never fed straight.
-    const double run = std::abs(n.x - a.x);
-    const bool steep = std::abs(n.drop.tip - a.drop.tip) > run * steepest_slope;
-    bool straight = !(steep && run <= shortest * (1 + 1e-9));
-    const int samples = steep ? 16 : 4;
-    // Elsewhere, well beyond the tolerance only: a resolved move may stray by about Tu between the
-    // points the chord test looked at.
-    const double allowance = steep ? s.chord_tolerance : 4 * s.chord_tolerance;
-    for (int i = 1; i < samples; ++i) {
-      const double t = static_cast<double>(i) / samples;
-      const double d = drop_assembly(bins, a.x + t * (n.x - a.x), a.y + t * (n.y - a.y), s.tool).tip;
-      highest = std::max(highest, d);
-      if (d > a.drop.tip + t * (n.drop.tip - a.drop.tip) + allowance) straight = false;
-    }
-    return straight ? std::numeric_limits<double>::quiet_NaN() : highest;
-  };
   tbb::parallel_for(std::size_t(0), rows.size(), [&](std::size_t j) {
-    const bool reverse = s.zigzag && j % 2 == 1;
+    const bool reverse = s_.zigzag && j % 2 == 1;
     std::vector<Node> ordered = rows[j].nodes;
     if (reverse) std::reverse(ordered.begin(), ordered.end());
     Segment current;
@@ -304,33 +339,37 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
       }
       if (!current.nodes.empty()) {
         const Node a = current.nodes.back();
-        refine(a, n, current.nodes, current.inserted, current.unresolved, refine, 0);
+        refine(a, n, current.nodes, current.inserted, current.unresolved, 0);
       }
       current.nodes.push_back(n);
     }
     close();
   });
+  return segments;
+}
 
-  // 3. The program: segments joined by feed links where the tool can stay on the cloud, by retracts
-  //    (at a height that clears everything under the traverse) elsewhere.
+bool CloudFinishingPlanner::link_is_safe(const Node& a, const Node& b) const {
+  const double length = std::hypot(b.x - a.x, b.y - a.y);
+  if (length > longest_link_) return false;
+  const ChordTests tests = chord_tests(a, b);
+  // At least the middle: a link shorter than the spacing is tested too.
+  const int samples = std::max(2, static_cast<int>(std::ceil(length / tests.spacing)));
+  for (int i = 1; i < samples; ++i) {
+    const double t = static_cast<double>(i) / samples;
+    const Drop d = drop_assembly(bins_, a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), s_.tool);
+    if (d.tip > a.drop.tip + t * (b.drop.tip - a.drop.tip) + tests.tolerance) return false;
+  }
+  return true;
+}
+
+// Stage 4, the program: segments joined by feed links where the tool can stay on the cloud, by
+// retracts (at a height that clears everything under the traverse) elsewhere.
+void CloudFinishingPlanner::join_segments(const std::vector<Row>& rows, const std::vector<std::vector<Segment>>& segments, CloudFinishing& out) const {
   CloudPath& path = out.path;
   double top = -kInfinity;
   for (const Row& row : rows)
     for (const Node& n : row.nodes)
       if (n.cuttable()) top = std::max(top, n.drop.tip);
-  const auto link_is_safe = [&](const Node& a, const Node& b) {
-    const double length = std::hypot(b.x - a.x, b.y - a.y);
-    if (length > longest_link) return false;
-    const ChordTests tests = chord_tests(a, b);
-    // At least the middle: a link shorter than the spacing is tested too.
-    const int samples = std::max(2, static_cast<int>(std::ceil(length / tests.spacing)));
-    for (int i = 1; i < samples; ++i) {
-      const double t = static_cast<double>(i) / samples;
-      const Drop d = drop_assembly(bins, a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), s.tool);
-      if (d.tip > a.drop.tip + t * (b.drop.tip - a.drop.tip) + tests.tolerance) return false;
-    }
-    return true;
-  };
   const Node* last = nullptr;
   for (std::size_t j = 0; j < rows.size(); ++j)
     for (const Segment& segment : segments[j]) {
@@ -339,18 +378,18 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
       out.unresolved_worst = std::max(out.unresolved_worst, segment.unresolved.worst);
       const Node& first = segment.nodes.front();
       if (!last) {
-        const double start = traverse_height(bins, s.tool, Eigen::Vector2d(first.x, first.y), Eigen::Vector2d(first.x, first.y), s.clearance);
-        path.add({first.x, first.y, std::max(start, first.drop.tip + s.approach)}, Motion::rapid);
-        path.add({first.x, first.y, first.drop.tip + s.approach}, Motion::rapid);
+        const double start = traverse_height(bins_, s_.tool, Eigen::Vector2d(first.x, first.y), Eigen::Vector2d(first.x, first.y), s_.clearance);
+        path.add({first.x, first.y, std::max(start, first.drop.tip + s_.approach)}, Motion::rapid);
+        path.add({first.x, first.y, first.drop.tip + s_.approach}, Motion::rapid);
       } else if (link_is_safe(*last, first)) {
         ++out.links;
       } else {
         ++out.retracts;
-        const double z = std::max({traverse_height(bins, s.tool, Eigen::Vector2d(last->x, last->y), Eigen::Vector2d(first.x, first.y), s.clearance),
-                                   last->drop.tip + s.approach, first.drop.tip + s.approach});
+        const double z = std::max({traverse_height(bins_, s_.tool, Eigen::Vector2d(last->x, last->y), Eigen::Vector2d(first.x, first.y), s_.clearance),
+                                   last->drop.tip + s_.approach, first.drop.tip + s_.approach});
         path.add({last->x, last->y, z}, Motion::rapid);
         path.add({first.x, first.y, z}, Motion::rapid);
-        path.add({first.x, first.y, first.drop.tip + s.approach}, Motion::rapid);
+        path.add({first.x, first.y, first.drop.tip + s_.approach}, Motion::rapid);
       }
       const bool linked = last && path.motion.back() != Motion::rapid;
       for (std::size_t k = 0; k < segment.nodes.size(); ++k) {
@@ -366,7 +405,22 @@ CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const Cloud
       }
       last = &segment.nodes.back();
     }
-  if (last) path.add({last->x, last->y, std::max(top, last->drop.tip) + s.clearance}, Motion::rapid);
+  if (last) path.add({last->x, last->y, std::max(top, last->drop.tip) + s_.clearance}, Motion::rapid);
+}
+
+}  // namespace
+
+CloudFinishing plan_cloud_finishing(const geometry::CloudBins& bins, const CloudArea& area, const CloudFinishingSettings& s) {
+  if (!(s.tool.cutter.radius > 0) || !(s.longitudinal_step > 0) || !(s.chord_tolerance > 0) || !(s.scallop > 0))
+    throw std::invalid_argument("cloud finishing: the tool radius, longitudinal step, chord tolerance and scallop must be positive");
+  if (s.transverse == TransverseStep::fixed && !(s.transverse_step > 0)) throw std::invalid_argument("cloud finishing: a fixed transverse step must be positive");
+  if (area.empty()) throw InputError("cloud finishing: the area to finish is empty");
+  const CloudFinishingPlanner planner(bins, area, s);
+  CloudFinishing out;
+  const std::vector<Row> rows = planner.place_passes();
+  planner.count_nodes(rows, out);
+  const std::vector<std::vector<Segment>> segments = planner.cut_segments(rows);
+  planner.join_segments(rows, segments, out);
   return out;
 }
 

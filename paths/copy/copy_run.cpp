@@ -51,6 +51,124 @@ nlohmann::json check_json(const PathCheck& c) {
   return {{"positions", c.positions}, {"deepest_mm", c.deepest}, {"worst_tip_drop_frame", vec(c.worst)}, {"positions_over_tolerance", c.over}};
 }
 
+// The rows: points with a normal, their packet, how many directions see them, overlap (PLY and VTP).
+void write_point_files(const std::filesystem::path& out, const geometry::PointCloud& cloud, const CopyResult& r, std::vector<std::string>& files) {
+  geometry::PointCloud rows;
+  rows.origin = cloud.origin;
+  rows.points = r.row_points, rows.normals = r.row_normals;
+  const int n = static_cast<int>(rows.points.size());
+  std::vector<double> packet(static_cast<std::size_t>(n)), seen(static_cast<std::size_t>(n), 0), overlap(static_cast<std::size_t>(n)), hits(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    packet[k] = r.packets.packet_of[k];
+    overlap[k] = r.packets.overlap[k];
+    hits[k] = r.normals.hits.empty() ? 0 : r.normals.hits[k];
+    for (int j = 0; j < static_cast<int>(r.visibility.columns.size()); ++j) seen[k] += r.visibility.test(i, j);
+  }
+  geometry::write_ply(out / "normals.ply", rows, {{"packet", packet, true}, {"directions_seeing", seen, true}, {"overlap", overlap, true}, {"hits", hits, true}});
+  files.push_back("normals.ply");
+  Eigen::Matrix3Xd points(3, n);
+  Eigen::VectorXd normals(3 * n);
+  for (int i = 0; i < n; ++i) points.col(i) = rows.points[static_cast<std::size_t>(i)], normals.segment<3>(3 * i) = rows.normals[static_cast<std::size_t>(i)];
+  VtuFields f;
+  f.point_scalars = {{"packet", packet}, {"directions_seeing", seen}, {"overlap", overlap}};
+  f.point_vectors = {{"normal", normals}};
+  write_points_vtp(out / "packets.vtp", points, f);
+  files.push_back("packets.vtp");
+}
+
+// One operation of a packet (roughing or finishing): its path (VTP), CL data and program written
+// under packet_<k>/, and its figures.
+nlohmann::json write_operation(const std::filesystem::path& out, const std::string& dir, const std::string& name, const PacketOperation& op,
+                               const Eigen::Matrix3d& frame, std::vector<std::string>& files) {
+  nlohmann::json e = {{"path_points", op.path.size()},
+                      {"cutting_length_mm", op.path.cutting_length()},
+                      {"rapid_length_mm", op.path.rapid_length()},
+                      {"cycle_time_s", op.cycle_time},
+                      {"check", check_json(op.check)}};
+  if (!op.path.empty()) {
+    write_path_vtp(out / dir / (name + ".vtp"), op.path, frame);
+    write_file_atomically(out / dir / (name + "_cl.csv"), machine::cl_csv(op.cl));
+    files.push_back(dir + "/" + name + ".vtp"), files.push_back(dir + "/" + name + "_cl.csv");
+  }
+  if (!op.gcode.empty()) {
+    write_file_atomically(out / dir / (name + ".ngc"), op.gcode);
+    files.push_back(dir + "/" + name + ".ngc");
+  }
+  if (!op.error.empty()) e["post_processor_error"] = op.error;
+  return e;
+}
+
+// Packet k's files and figures.
+nlohmann::json write_packet(const std::filesystem::path& out, std::size_t k, const PacketPlan& p, int points, std::vector<std::string>& files) {
+  const std::string dir = "packet_" + std::to_string(k + 1);
+  std::filesystem::create_directories(out / dir);
+  nlohmann::json j = {{"direction", p.direction}, {"axis", vec(p.axis)}, {"rotary_deg", {p.rotary.x(), p.rotary.y()}}, {"points", points}};
+  if (!p.error.empty()) j["error"] = p.error;
+  if (p.finishing) {
+    const CloudFinishing& f = *p.finishing;
+    j["finishing"] = write_operation(out, dir, "finishing", p.finish_op, p.frame, files);
+    j["finishing"].update({{"passes", f.passes},
+                           {"nodes", f.nodes},
+                           {"inserted_nodes", f.inserted},
+                           {"unresolved_chords", f.unresolved},
+                           {"unresolved_worst_mm", f.unresolved_worst},
+                           {"gaps", f.gaps},
+                           {"lifted_by_shank_or_holder", f.lifted},
+                           {"transverse_step_mm", {{"smallest", f.smallest_step}, {"mean", f.mean_step}, {"largest", f.largest_step}}}});
+  }
+  if (p.roughing) {
+    const CloudRoughing& g = *p.roughing;
+    j["roughing"] = write_operation(out, dir, "roughing", p.rough_op, p.frame, files);
+    j["roughing"].update({{"layers", g.layers},
+                          {"nodes", g.nodes},
+                          {"cut", g.cut},
+                          {"blocked", g.blocked},
+                          {"unreachable", g.unreachable},
+                          {"side_entries", g.side_entries},
+                          {"ramps", g.ramps},
+                          {"zigzag_ramps", g.zigzag_ramps},
+                          {"voxels", g.voxels},
+                          {"voxel_mm", g.voxel}});
+  }
+  return j;
+}
+
+nlohmann::json copy_summary(const CopyRunOptions& o, const CopySettings& s, const machine::Machine& m, const CopyResult& r, const nlohmann::json& packets,
+                            const std::vector<std::string>& files) {
+  nlohmann::json times = nlohmann::json::array();
+  double wall = 0;
+  for (const auto& t : r.times) times.push_back({{"stage", t.stage}, {"wall_s", t.wall}, {"cpu_s", t.cpu}}), wall += t.wall;
+  return {{"command", "copy"},
+          {"cloud", o.cloud.string()},
+          {"settings", s.origin},
+          {"machine", {{"name", m.name}, {"kinematics", machine::chain_name(m.chain)}}},
+          {"cloud_points", r.cloud_points},
+          {"obstacle_points", r.obstacle_points},
+          {"stock", {{"lo", vec(r.stock.lo)}, {"hi", vec(r.stock.hi)}}},
+          {"normals", {{"from_file", r.normals_from_file}, {"points", r.row_points.size()}, {"pca_mean_disagreement_deg", r.pca_disagreement}}},
+          {"visibility",
+           {{"directions", r.visibility.columns.size()},
+            {"reachable_directions", std::count(r.visibility.reachable.begin(), r.visibility.reachable.end(), 1)},
+            {"tool_visible_bits", r.visibility.tool_visible},
+            {"cleared_by_collision", r.visibility.collisions}}},
+          {"grouping",
+           {{"method", r.packets.method},
+            {"packets", r.packets.directions.size()},
+            {"covered", r.packets.covered},
+            {"coverage", r.row_points.empty() ? 0.0 : static_cast<double>(r.packets.covered) / static_cast<double>(r.row_points.size())},
+            {"coverage_met", r.packets.coverage_met},
+            {"overlap_points", r.packets.overlaps},
+            {"reattached", r.packets.reattached},
+            {"unmachinable", r.packets.unmachinable},
+            {"combinations", r.packets.combinations}}},
+          {"packets", packets},
+          {"times", times},
+          {"wall_s", wall},
+          {"files", files},
+          {"machine_info", machine_info()}};
+}
+
 }  // namespace
 
 nlohmann::json run_copy(const CopyRunOptions& o) {
@@ -68,122 +186,11 @@ nlohmann::json run_copy(const CopyRunOptions& o) {
 
   std::filesystem::create_directories(o.out);
   std::vector<std::string> files;
-  // The rows: points with a normal, their packet, how many directions see them, overlap.
-  {
-    geometry::PointCloud rows;
-    rows.origin = cloud.origin;
-    rows.points = r.row_points, rows.normals = r.row_normals;
-    const int n = static_cast<int>(rows.points.size());
-    std::vector<double> packet(static_cast<std::size_t>(n)), seen(static_cast<std::size_t>(n), 0), overlap(static_cast<std::size_t>(n)), hits(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      packet[k] = r.packets.packet_of[k];
-      overlap[k] = r.packets.overlap[k];
-      hits[k] = r.normals.hits.empty() ? 0 : r.normals.hits[k];
-      for (int j = 0; j < static_cast<int>(r.visibility.columns.size()); ++j) seen[k] += r.visibility.test(i, j);
-    }
-    geometry::write_ply(o.out / "normals.ply", rows, {{"packet", packet, true}, {"directions_seeing", seen, true}, {"overlap", overlap, true}, {"hits", hits, true}});
-    files.push_back("normals.ply");
-    Eigen::Matrix3Xd points(3, n);
-    Eigen::VectorXd normals(3 * n);
-    for (int i = 0; i < n; ++i) points.col(i) = rows.points[static_cast<std::size_t>(i)], normals.segment<3>(3 * i) = rows.normals[static_cast<std::size_t>(i)];
-    VtuFields f;
-    f.point_scalars = {{"packet", packet}, {"directions_seeing", seen}, {"overlap", overlap}};
-    f.point_vectors = {{"normal", normals}};
-    write_points_vtp(o.out / "packets.vtp", points, f);
-    files.push_back("packets.vtp");
-  }
-
+  write_point_files(o.out, cloud, r, files);
   nlohmann::json packets = nlohmann::json::array();
   const auto sizes = r.packets.sizes();
-  for (std::size_t k = 0; k < r.plans.size(); ++k) {
-    const PacketPlan& p = r.plans[k];
-    const std::string dir = "packet_" + std::to_string(k + 1);
-    std::filesystem::create_directories(o.out / dir);
-    nlohmann::json j = {{"direction", p.direction},
-                        {"axis", vec(p.axis)},
-                        {"rotary_deg", {p.rotary.x(), p.rotary.y()}},
-                        {"points", sizes[k]}};
-    if (!p.error.empty()) j["error"] = p.error;
-    const auto op_json = [&](const PacketOperation& op, const std::string& name) {
-      nlohmann::json e = {{"path_points", op.path.size()},
-                          {"cutting_length_mm", op.path.cutting_length()},
-                          {"rapid_length_mm", op.path.rapid_length()},
-                          {"cycle_time_s", op.cycle_time},
-                          {"check", check_json(op.check)}};
-      if (!op.path.empty()) {
-        write_path_vtp(o.out / dir / (name + ".vtp"), op.path, p.frame);
-        write_file_atomically(o.out / dir / (name + "_cl.csv"), machine::cl_csv(op.cl));
-        files.push_back(dir + "/" + name + ".vtp"), files.push_back(dir + "/" + name + "_cl.csv");
-      }
-      if (!op.gcode.empty()) {
-        write_file_atomically(o.out / dir / (name + ".ngc"), op.gcode);
-        files.push_back(dir + "/" + name + ".ngc");
-      }
-      if (!op.error.empty()) e["post_processor_error"] = op.error;
-      return e;
-    };
-    if (p.finishing) {
-      const CloudFinishing& f = *p.finishing;
-      j["finishing"] = op_json(p.finish_op, "finishing");
-      j["finishing"].update({{"passes", f.passes},
-                             {"nodes", f.nodes},
-                             {"inserted_nodes", f.inserted},
-                             {"unresolved_chords", f.unresolved},
-                             {"unresolved_worst_mm", f.unresolved_worst},
-                             {"gaps", f.gaps},
-                             {"lifted_by_shank_or_holder", f.lifted},
-                             {"transverse_step_mm", {{"smallest", f.smallest_step}, {"mean", f.mean_step}, {"largest", f.largest_step}}}});
-    }
-    if (p.roughing) {
-      const CloudRoughing& g = *p.roughing;
-      j["roughing"] = op_json(p.rough_op, "roughing");
-      j["roughing"].update({{"layers", g.layers},
-                            {"nodes", g.nodes},
-                            {"cut", g.cut},
-                            {"blocked", g.blocked},
-                            {"unreachable", g.unreachable},
-                            {"side_entries", g.side_entries},
-                            {"ramps", g.ramps},
-                            {"zigzag_ramps", g.zigzag_ramps},
-                            {"voxels", g.voxels},
-                            {"voxel_mm", g.voxel}});
-    }
-    packets.push_back(j);
-  }
-
-  nlohmann::json times = nlohmann::json::array();
-  double wall = 0;
-  for (const auto& t : r.times) times.push_back({{"stage", t.stage}, {"wall_s", t.wall}, {"cpu_s", t.cpu}}), wall += t.wall;
-  nlohmann::json summary = {
-      {"command", "copy"},
-      {"cloud", o.cloud.string()},
-      {"settings", s.origin},
-      {"machine", {{"name", m.name}, {"kinematics", machine::chain_name(m.chain)}}},
-      {"cloud_points", r.cloud_points},
-      {"obstacle_points", r.obstacle_points},
-      {"stock", {{"lo", vec(r.stock.lo)}, {"hi", vec(r.stock.hi)}}},
-      {"normals", {{"from_file", r.normals_from_file}, {"points", r.row_points.size()}, {"pca_mean_disagreement_deg", r.pca_disagreement}}},
-      {"visibility",
-       {{"directions", r.visibility.columns.size()},
-        {"reachable_directions", std::count(r.visibility.reachable.begin(), r.visibility.reachable.end(), 1)},
-        {"tool_visible_bits", r.visibility.tool_visible},
-        {"cleared_by_collision", r.visibility.collisions}}},
-      {"grouping",
-       {{"method", r.packets.method},
-        {"packets", r.packets.directions.size()},
-        {"covered", r.packets.covered},
-        {"coverage", r.row_points.empty() ? 0.0 : static_cast<double>(r.packets.covered) / static_cast<double>(r.row_points.size())},
-        {"coverage_met", r.packets.coverage_met},
-        {"overlap_points", r.packets.overlaps},
-        {"reattached", r.packets.reattached},
-        {"unmachinable", r.packets.unmachinable},
-        {"combinations", r.packets.combinations}}},
-      {"packets", packets},
-      {"times", times},
-      {"wall_s", wall},
-      {"files", files},
-      {"machine_info", machine_info()}};
+  for (std::size_t k = 0; k < r.plans.size(); ++k) packets.push_back(write_packet(o.out, k, r.plans[k], sizes[k], files));
+  const nlohmann::json summary = copy_summary(o, s, m, r, packets, files);
   write_summary(o.out, summary);
   return summary;
 }

@@ -104,191 +104,244 @@ std::vector<int> all_samples(const SurfaceSamples& s) {
   return out;
 }
 
-}  // namespace
+using Say = std::function<void(const std::string&)>;
 
-json run_finish(const FinishCase& c, const FinishRunOptions& o) {
-  const auto started = std::chrono::steady_clock::now();
-  std::filesystem::create_directories(o.out);
-  const auto say = [&](const std::string& line) {
-    if (!o.quiet) std::printf("%s\n", line.c_str());
-    std::fflush(stdout);
-  };
-  const geometry::NurbsSurface& surface = c.surface.surface;
+// Stage 1's result: the surface sampled, its PCA plane, and the tool the verdict (or the case) chose.
+struct Described {
+  FinishingProblem problem;
+  std::vector<Eigen::Vector3d> points, normals;  // the samples inside the trim
+  PcaPlane plane;
+  ToolVerdict verdict;
+  FinishingSettings settings;  // the case's, with the chosen tool
+};
 
-  // The surface described, and the tool chosen (§2.4.1).
-  FinishingSettings search_settings = c.settings;
-  search_settings.exact = false;  // the fast variant inside the search; the output path below is the case's
-  FinishingProblem problem = make_problem(surface, c.surface.trim, search_settings, c.samples, c.mesh_step);
-  std::vector<Eigen::Vector3d> points, normals;
-  for (const int i : all_samples(problem.samples)) {
-    points.push_back(problem.samples.points[static_cast<std::size_t>(i)]);
-    normals.push_back(problem.samples.normals[static_cast<std::size_t>(i)]);
-  }
-  const PcaPlane plane = pca_plane(points);
-  const ToolVerdict verdict = choose_tool(plane, c.torus, c.ball, c.settings.scallop, c.settings.timer.cutting());
-  FinishingSettings settings = c.settings;
-  if (c.auto_tool) settings.tool = verdict.ball ? c.ball : c.torus;
-  problem.settings.tool = settings.tool;
-  say("drom finish: " + c.name + " (" + c.surface.description + "), " + settings.tool.name() + ", sh " + std::to_string(settings.scallop) + " mm");
-  say("  verdict: " + verdict.reason);
-
-  // Zoning and setups.
+// Stage 2's result.
+struct Zoning {
   Zones zones;
   std::vector<ZoneSetup> setups;
-  std::vector<KOptimum> optima;
-  const std::string fingerprint = std::to_string(std::hash<std::string>{}(c.resolved_toml + kVersion));
-  const bool ball = settings.tool.kind == ToolKind::ball;
-  if (c.orientation) {
-    zones.zone.assign(static_cast<std::size_t>(problem.samples.size()), -1);
-    for (const int i : all_samples(problem.samples)) zones.zone[static_cast<std::size_t>(i)] = 0;
-    zones.cluster = {0};
-    const ZoneSetup tilt = tilted_setup((*c.orientation)(0), (*c.orientation)(1), 0, plane.mean);
-    std::vector<Eigen::Vector3d> turned_points;
-    for (const auto& q : points) turned_points.push_back(tilt.to_machine(q));
-    const PcaPlane turned = pca_plane(turned_points);
-    const double azimuth = ball ? turned.principal_azimuth : machine_steepest_azimuth(problem.samples, all_samples(problem.samples), tilt.rotation);
-    setups = {tilted_setup((*c.orientation)(0), (*c.orientation)(1), azimuth, plane.mean)};
-    say("  fixed orientation: one zone, tool axis at " + std::to_string((*c.orientation)(0) * kDeg) + " deg from Z");
-  } else if (c.optimize) {
-    const std::filesystem::path dir = o.out / "optimization";
-    std::filesystem::create_directories(dir);
-    OptimizerSettings os;
-    os.mode = c.setup;
-    os.budget = c.budget;
-    os.surrogate = c.surrogate;
-    std::vector<int> ks;
-    for (int k = c.clusters_min; k <= c.clusters_max; ++k) ks.push_back(k);
-    optima.resize(ks.size());
-    std::atomic<std::size_t> next{0};
-    std::mutex print;
-    const auto work = [&] {
-      for (std::size_t i; (i = next++) < ks.size();) {
-        std::ostringstream name;
-        name << 'K' << ks[i] << ".json";
-        const std::filesystem::path file = dir / name.str();
-        KOptimum k;
-        bool resumed = load_optimum(file, fingerprint, problem, k);
-        const auto t0 = std::chrono::steady_clock::now();
-        if (!resumed) {
-          k = optimize_clusters(problem, ks[i], os);
-          write_file_atomically(file, optimum_json(k, fingerprint).dump(1));
-        }
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        std::ostringstream line;
-        line.precision(4);
-        line << "  K = " << ks[i] << ": " << k.zones.count() << " zones, f0 " << k.start_time << " s -> f* " << k.best_time << " s (gain " << 100 * k.gain()
-             << " %), " << static_cast<int>(k.spent) << " black-box equivalents";
-        if (resumed) line << " (kept from an earlier run)";
-        else line << ", " << seconds << " s";
-        {
-          std::lock_guard<std::mutex> lock(print);
-          say(line.str());
-        }
-        optima[i] = std::move(k);
-      }
-    };
-    const int threads = std::max(1, std::min<int>(static_cast<int>(ks.size()), o.threads > 0 ? o.threads : static_cast<int>(std::thread::hardware_concurrency())));
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t) pool.emplace_back(work);
-    work();
-    for (auto& t : pool) t.join();
-    const auto best = std::min_element(optima.begin(), optima.end(), [](const KOptimum& a, const KOptimum& b) { return a.best_time < b.best_time; });
-    zones = best->zones;
-    setups = best->setups;
-  } else {
-    const int k = c.clusters_min;
-    std::vector<int> labels;
-    if (c.algorithm == "kmeans") labels = kmeans(problem.samples, surface, k, c.clustering);
-    else if (c.algorithm == "rpcl") {
-      RpclSettings r;
-      r.seed = c.rpcl_seed;
-      labels = rpcl(problem.samples, surface, k, c.clustering, r);
-    } else labels = ward(problem.samples, k, c.clustering.weights);
-    zones = connected_zones(labels, problem.samples.cells_u, problem.samples.cells_v);
-    const auto shapes = describe_zones(problem.samples, zones);
-    for (const auto& s : shapes) setups.push_back(three_axis_setup(ball ? s.plane.principal_azimuth : s.steepest_azimuth));
-  }
+  std::vector<KOptimum> optima;  // one per K when the zoning was optimised
+};
 
-  // The output path: the case's variant, ordered, timed.
-  const FinishingPlan plan = plan_finishing(problem.mesh, zones, setups, settings);
+// Stage 1 (§2.4.1): the surface described, and the tool chosen.
+Described describe_surface(const FinishCase& c, const Say& say) {
+  FinishingSettings search_settings = c.settings;
+  search_settings.exact = false;  // the fast variant inside the search; the output path is the case's
+  Described d{make_problem(c.surface.surface, c.surface.trim, search_settings, c.samples, c.mesh_step), {}, {}, {}, {}, c.settings};
+  for (const int i : all_samples(d.problem.samples)) {
+    d.points.push_back(d.problem.samples.points[static_cast<std::size_t>(i)]);
+    d.normals.push_back(d.problem.samples.normals[static_cast<std::size_t>(i)]);
+  }
+  d.plane = pca_plane(d.points);
+  d.verdict = choose_tool(d.plane, c.torus, c.ball, c.settings.scallop, c.settings.timer.cutting());
+  if (c.auto_tool) d.settings.tool = d.verdict.ball ? c.ball : c.torus;
+  d.problem.settings.tool = d.settings.tool;
+  say("drom finish: " + c.name + " (" + c.surface.description + "), " + d.settings.tool.name() + ", sh " + std::to_string(d.settings.scallop) + " mm");
+  say("  verdict: " + d.verdict.reason);
+  return d;
+}
+
+// Stage 2, a fixed tool axis: one zone, 3+2 along the case's orientation.
+Zoning zone_at_fixed_orientation(const FinishCase& c, const Described& d, const Say& say) {
+  const SurfaceSamples& samples = d.problem.samples;
+  Zoning z;
+  z.zones.zone.assign(static_cast<std::size_t>(samples.size()), -1);
+  for (const int i : all_samples(samples)) z.zones.zone[static_cast<std::size_t>(i)] = 0;
+  z.zones.cluster = {0};
+  const ZoneSetup tilt = tilted_setup((*c.orientation)(0), (*c.orientation)(1), 0, d.plane.mean);
+  std::vector<Eigen::Vector3d> turned_points;
+  for (const auto& q : d.points) turned_points.push_back(tilt.to_machine(q));
+  const PcaPlane turned = pca_plane(turned_points);
+  const bool ball = d.settings.tool.kind == ToolKind::ball;
+  const double azimuth = ball ? turned.principal_azimuth : machine_steepest_azimuth(samples, all_samples(samples), tilt.rotation);
+  z.setups = {tilted_setup((*c.orientation)(0), (*c.orientation)(1), azimuth, d.plane.mean)};
+  say("  fixed orientation: one zone, tool axis at " + std::to_string((*c.orientation)(0) * kDeg) + " deg from Z");
+  return z;
+}
+
+// One K's optimum: kept from an earlier run of the same case, or searched and stored atomically.
+KOptimum optimize_one_k(const FinishingProblem& problem, int clusters, const OptimizerSettings& os, const std::filesystem::path& dir,
+                        const std::string& fingerprint, std::mutex& print, const Say& say) {
+  std::ostringstream name;
+  name << 'K' << clusters << ".json";
+  const std::filesystem::path file = dir / name.str();
+  KOptimum k;
+  bool resumed = load_optimum(file, fingerprint, problem, k);
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!resumed) {
+    k = optimize_clusters(problem, clusters, os);
+    write_file_atomically(file, optimum_json(k, fingerprint).dump(1));
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::ostringstream line;
+  line.precision(4);
+  line << "  K = " << clusters << ": " << k.zones.count() << " zones, f0 " << k.start_time << " s -> f* " << k.best_time << " s (gain " << 100 * k.gain()
+       << " %), " << static_cast<int>(k.spent) << " black-box equivalents";
+  if (resumed) line << " (kept from an earlier run)";
+  else line << ", " << seconds << " s";
+  {
+    std::lock_guard<std::mutex> lock(print);
+    say(line.str());
+  }
+  return k;
+}
+
+// Stage 2, optimised (the seed's ch. 4): every K in the case's range, in parallel, the best kept.
+Zoning zone_by_optimization(const FinishCase& c, const FinishRunOptions& o, const Described& d, const Say& say) {
+  const std::filesystem::path dir = o.out / "optimization";
+  std::filesystem::create_directories(dir);
+  const OptimizerSettings os{.mode = c.setup, .budget = c.budget, .surrogate = c.surrogate};
+  const std::string fingerprint = std::to_string(std::hash<std::string>{}(c.resolved_toml + kVersion));
+  std::vector<int> ks;
+  for (int k = c.clusters_min; k <= c.clusters_max; ++k) ks.push_back(k);
+  Zoning z;
+  z.optima.resize(ks.size());
+  std::atomic<std::size_t> next{0};
+  std::mutex print;
+  const auto work = [&] {
+    for (std::size_t i; (i = next++) < ks.size();) z.optima[i] = optimize_one_k(d.problem, ks[i], os, dir, fingerprint, print, say);
+  };
+  const int threads = std::max(1, std::min<int>(static_cast<int>(ks.size()), o.threads > 0 ? o.threads : static_cast<int>(std::thread::hardware_concurrency())));
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  const auto best = std::min_element(z.optima.begin(), z.optima.end(), [](const KOptimum& a, const KOptimum& b) { return a.best_time < b.best_time; });
+  z.zones = best->zones;
+  z.setups = best->setups;
+  return z;
+}
+
+// Stage 2, one partition: the case's clustering at K = clusters_min, each zone 3-axis.
+Zoning zone_by_clustering(const FinishCase& c, const Described& d) {
+  const SurfaceSamples& samples = d.problem.samples;
+  const int k = c.clusters_min;
+  std::vector<int> labels;
+  if (c.algorithm == "kmeans") labels = kmeans(samples, c.surface.surface, k, c.clustering);
+  else if (c.algorithm == "rpcl") {
+    RpclSettings r;
+    r.seed = c.rpcl_seed;
+    labels = rpcl(samples, c.surface.surface, k, c.clustering, r);
+  } else labels = ward(samples, k, c.clustering.weights);
+  Zoning z;
+  z.zones = connected_zones(labels, samples.cells_u, samples.cells_v);
+  const bool ball = d.settings.tool.kind == ToolKind::ball;
+  for (const auto& s : describe_zones(samples, z.zones)) z.setups.push_back(three_axis_setup(ball ? s.plane.principal_azimuth : s.steepest_azimuth));
+  return z;
+}
+
+Zoning zone_surface(const FinishCase& c, const FinishRunOptions& o, const Described& d, const Say& say) {
+  if (c.orientation) return zone_at_fixed_orientation(c, d, say);
+  if (c.optimize) return zone_by_optimization(c, o, d, say);
+  return zone_by_clustering(c, d);
+}
+
+// Stage 3: the output path, the case's variant, ordered and timed.
+FinishingPlan finish_zones(const Described& d, const Zoning& z, const Say& say) {
+  FinishingPlan plan = plan_finishing(d.problem.mesh, z.zones, z.setups, d.settings);
   std::ostringstream totals;
   totals.precision(4);
-  totals << "  finish: " << zones.count() << " zones, " << plan.pass_count() << " passes, " << plan.time() << " s (passes " << plan.pass_time() << ", links "
+  totals << "  finish: " << z.zones.count() << " zones, " << plan.pass_count() << " passes, " << plan.time() << " s (passes " << plan.pass_time() << ", links "
          << plan.link_time() << ", retracts " << plan.retract_time() << ", between zones " << plan.move_time << "), " << plan.length() << " mm";
   say(totals.str());
-  const int gouges = plan.gouging_contacts();
-  std::string gouge_note;
-  if (gouges > 0) {
-    Eigen::Vector3d at = Eigen::Vector3d::Zero();
-    for (const auto& z : plan.zones) {
-      const auto p = std::find_if(z.passes.begin(), z.passes.end(), [](const Pass& q) { return q.gouging_contacts > 0; });
-      if (p != z.passes.end()) {
-        at = p->first_gouge;
-        break;
-      }
-    }
-    std::ostringstream msg;
-    msg.precision(4);
-    msg << "the " << settings.tool.name() << " gouges the surface at " << gouges << " contact points, the first at (" << at.transpose()
-        << ") mm: the ground across the passes is more concave than the tool's trace there";
-    // A tool axis the user fixed is theirs to change; a setup drom chose is reported, loudly.
-    if (c.orientation) throw InputError(c.orientation_where + ": " + msg.str() + "; tilt the axis less, or use a ball or a smaller corner radius");
-    gouge_note = msg.str() + " (a smaller tool, or a ball, avoids it)";
-    say("  WARNING: " + gouge_note);
-  }
-  const ScallopCheck check = check_scallop(surface, plan.zones, settings.tool, 0, 1, 0, 1, 40, 40);
+  return plan;
+}
 
-  // Files.
-  std::vector<std::string> files = {"zones.vtu", "paths.vtp", "cl.csv", "breakdown.csv"};
-  write_zone_map(o.out / "zones.vtu", surface, problem.samples, zones);
-  write_pass_polylines(o.out / "paths.vtp", plan, settings.tool);
-  write_cl_csv(o.out / "cl.csv", plan, settings.tool);
-  write_breakdown_csv(o.out / "breakdown.csv", plan);
-  // The program: machine/'s inverse kinematics, feed predictor and post-processor on the case's machine.
-  std::string program_note;
-  double predicted = -1;
+// Stage 4: contacts where the ground is more concave than the tool's trace. Refused where the user
+// fixed the axis (theirs to change); reported, loudly, where drom chose the setup. Returns the note.
+std::string report_gouges(const FinishCase& c, const FinishingPlan& plan, const Tool& tool, const Say& say) {
+  const int gouges = plan.gouging_contacts();
+  if (gouges == 0) return "";
+  Eigen::Vector3d at = Eigen::Vector3d::Zero();
+  for (const auto& z : plan.zones) {
+    const auto p = std::find_if(z.passes.begin(), z.passes.end(), [](const Pass& q) { return q.gouging_contacts > 0; });
+    if (p != z.passes.end()) {
+      at = p->first_gouge;
+      break;
+    }
+  }
+  std::ostringstream msg;
+  msg.precision(4);
+  msg << "the " << tool.name() << " gouges the surface at " << gouges << " contact points, the first at (" << at.transpose()
+      << ") mm: the ground across the passes is more concave than the tool's trace there";
+  if (c.orientation) throw InputError(c.orientation_where + ": " + msg.str() + "; tilt the axis less, or use a ball or a smaller corner radius");
+  const std::string note = msg.str() + " (a smaller tool, or a ball, avoids it)";
+  say("  WARNING: " + note);
+  return note;
+}
+
+// Stage 6's program: machine/'s inverse kinematics, feed predictor and post-processor on the case's
+// machine. A program the machine cannot run is not written; the note says why.
+struct PostedProgram {
+  double predicted_cycle_time = -1;  // s; < 0: no program
+  std::string note;
+};
+
+PostedProgram post_program(const FinishCase& c, const FinishingPlan& plan, const FinishingSettings& settings, const std::filesystem::path& out,
+                           std::vector<std::string>& files, const Say& say) {
+  PostedProgram posted;
   try {
     const machine::Machine m = machine::load_machine(c.machine_definition);
     const machine::Kinematics kinematics(m);
     const machine::ClProgram cl = cl_program(plan, settings.tool, settings.timer.cutting().feed * 60, settings.clearance, settings.approach);
     const machine::ClOnMachine on = machine::cl_to_machine_program(cl, kinematics);
     if (!on.joints.violations.empty()) {
-      program_note = "no program: on " + m.name + ", " + on.joints.violations.front().what;
+      posted.note = "no program: on " + m.name + ", " + on.joints.violations.front().what;
     } else {
-      predicted = machine::predict_feed(on.program, kinematics).cycle_time;
-      write_file_atomically(o.out / "program.ngc", machine::post_process(cl, kinematics, {"drom finish " + c.name}));
+      posted.predicted_cycle_time = machine::predict_feed(on.program, kinematics).cycle_time;
+      write_file_atomically(out / "program.ngc", machine::post_process(cl, kinematics, {"drom finish " + c.name}));
       files.push_back("program.ngc");
       std::ostringstream line;
       line.precision(4);
-      line << "  program for " << m.name << ": cycle time " << predicted << " s predicted by machine/ (junctions, per-axis limits, rapids)";
+      line << "  program for " << m.name << ": cycle time " << posted.predicted_cycle_time << " s predicted by machine/ (junctions, per-axis limits, rapids)";
       say(line.str());
     }
   } catch (const InputError& e) {
-    program_note = std::string("no program: ") + e.what();
+    posted.note = std::string("no program: ") + e.what();
   }
-  if (!program_note.empty()) say("  " + program_note);
-  if (!optima.empty()) {
-    std::ostringstream csv;
-    csv << "clusters,black_box_equivalents,best_time_s\n";
-    PlotSpec plot;
-    plot.title = c.name + ": optimisation history";
-    plot.x_label = "black-box evaluations (equivalents)";
-    plot.y_label = "best finishing time (s)";
-    for (const auto& k : optima) {
-      PlotSeries series;
-      series.name = "K = " + std::to_string(k.clusters);
-      for (const auto& [x, y] : k.history) {
-        csv << k.clusters << ',' << x << ',' << y << '\n';
-        series.x.push_back(x);
-        series.y.push_back(y);
-      }
-      plot.series.push_back(series);
-    }
-    write_file_atomically(o.out / "history.csv", csv.str());
-    files.push_back("history.csv");
-    if (write_png_plot(o.out / "history.png", plot)) files.push_back("history.png");
-  }
+  if (!posted.note.empty()) say("  " + posted.note);
+  return posted;
+}
 
+// Stage 6's history: each K's best time against the search's spending (CSV and PNG).
+void write_optimization_history(const FinishCase& c, const std::vector<KOptimum>& optima, const std::filesystem::path& out, std::vector<std::string>& files) {
+  if (optima.empty()) return;
+  std::ostringstream csv;
+  csv << "clusters,black_box_equivalents,best_time_s\n";
+  PlotSpec plot;
+  plot.title = c.name + ": optimisation history";
+  plot.x_label = "black-box evaluations (equivalents)";
+  plot.y_label = "best finishing time (s)";
+  for (const auto& k : optima) {
+    PlotSeries series;
+    series.name = "K = " + std::to_string(k.clusters);
+    for (const auto& [x, y] : k.history) {
+      csv << k.clusters << ',' << x << ',' << y << '\n';
+      series.x.push_back(x);
+      series.y.push_back(y);
+    }
+    plot.series.push_back(series);
+  }
+  write_file_atomically(out / "history.csv", csv.str());
+  files.push_back("history.csv");
+  if (write_png_plot(out / "history.png", plot)) files.push_back("history.png");
+}
+
+// Everything the summary reports, by name.
+struct FinishResults {
+  const Described& described;
+  const Zoning& zoning;
+  const FinishingPlan& plan;
+  const std::string& gouge_note;
+  const ScallopCheck& check;
+  const PostedProgram& program;
+  const std::vector<std::string>& files;
+};
+
+json finish_summary(const FinishCase& c, const FinishResults& r) {
+  const FinishingSettings& settings = r.described.settings;
+  const PcaPlane& plane = r.described.plane;
+  const ToolVerdict& verdict = r.described.verdict;
+  const FinishingPlan& plan = r.plan;
   json s;
   s["command"] = "drom finish";
   s["case"] = c.name;
@@ -300,12 +353,12 @@ json run_finish(const FinishCase& c, const FinishRunOptions& o) {
   s["accounting"] = settings.accounting == Accounting::machine ? "machine" : "seed";
   s["time_model"] = "search: machine/'s double S per move; program: machine/'s feed predictor";
   s["machine"] = c.machine_definition;
-  if (predicted >= 0) s["predicted_cycle_time_s"] = predicted;
+  if (r.program.predicted_cycle_time >= 0) s["predicted_cycle_time_s"] = r.program.predicted_cycle_time;
   s["pca"] = {{"lambda", {plane.lambda(0), plane.lambda(1), plane.lambda(2)}},
               {"shape_factor", plane.shape_factor},
               {"size_mm2", plane.size},
               {"slope_deg", plane.slope * kDeg},
-              {"mean_local_slope_deg", mean_slope(normals) * kDeg},
+              {"mean_local_slope_deg", mean_slope(r.described.normals) * kDeg},
               {"principal_azimuth_deg", plane.principal_azimuth * kDeg},
               {"steepest_azimuth_deg", plane.steepest_azimuth * kDeg},
               {"width_mm", plane.width},
@@ -316,7 +369,7 @@ json run_finish(const FinishCase& c, const FinishRunOptions& o) {
                   {"plane_time_torus_s", verdict.torus.time},
                   {"plane_time_ball_s", verdict.ball_time.time},
                   {"reason", verdict.reason}};
-  s["zones"] = zones.count();
+  s["zones"] = r.zoning.zones.count();
   s["time_s"] = {{"total", plan.time()}, {"passes", plan.pass_time()}, {"links", plan.link_time()}, {"retracts", plan.retract_time()}, {"between_zones", plan.move_time}};
   s["length_mm"] = {{"total", plan.length()}, {"passes", plan.pass_length()}, {"links", plan.link_length()}};
   s["passes"] = plan.pass_count();
@@ -324,14 +377,42 @@ json run_finish(const FinishCase& c, const FinishRunOptions& o) {
   for (const auto& z : plan.zones)
     for (const auto& p : z.passes) run_outs += p.run_out_length;
   s["run_out"] = {{"longest_mm", settings.run_out}, {"contact_length_mm", run_outs}};
-  s["gouging_contacts"] = gouges;
-  if (!gouge_note.empty()) s["gouge_warning"] = gouge_note;
+  s["gouging_contacts"] = plan.gouging_contacts();
+  if (!r.gouge_note.empty()) s["gouge_warning"] = r.gouge_note;
+  const ScallopCheck& check = r.check;
   s["scallop_check"] = {{"points", check.points}, {"max_height_mm", check.max_height}, {"max_gouge_mm", check.max_gouge}, {"worst_uv", {check.worst_uv.x(), check.worst_uv.y()}}, {"grid", "40 x 40 over the surface"}};
-  for (const auto& k : optima)
+  for (const auto& k : r.zoning.optima)
     s["optimization"].push_back({{"clusters", k.clusters}, {"zones", k.zones.count()}, {"f0_s", k.start_time}, {"f_star_s", k.best_time}, {"gain", k.gain()},
                                  {"black_box_equivalents", k.spent}});
-  if (!program_note.empty()) s["program"] = program_note;
-  s["files"] = files;
+  if (!r.program.note.empty()) s["program"] = r.program.note;
+  s["files"] = r.files;
+  return s;
+}
+
+}  // namespace
+
+json run_finish(const FinishCase& c, const FinishRunOptions& o) {
+  const auto started = std::chrono::steady_clock::now();
+  std::filesystem::create_directories(o.out);
+  const Say say = [&](const std::string& line) {
+    if (!o.quiet) std::printf("%s\n", line.c_str());
+    std::fflush(stdout);
+  };
+  const Described described = describe_surface(c, say);
+  const Zoning zoning = zone_surface(c, o, described, say);
+  const FinishingPlan plan = finish_zones(described, zoning, say);
+  const std::string gouge_note = report_gouges(c, plan, described.settings.tool, say);
+  const ScallopCheck check = check_scallop(c.surface.surface, plan.zones, described.settings.tool, 0, 1, 0, 1, 40, 40);
+
+  std::vector<std::string> files = {"zones.vtu", "paths.vtp", "cl.csv", "breakdown.csv"};
+  write_zone_map(o.out / "zones.vtu", c.surface.surface, described.problem.samples, zoning.zones);
+  write_pass_polylines(o.out / "paths.vtp", plan, described.settings.tool);
+  write_cl_csv(o.out / "cl.csv", plan, described.settings.tool);
+  write_breakdown_csv(o.out / "breakdown.csv", plan);
+  const PostedProgram program = post_program(c, plan, described.settings, o.out, files, say);
+  write_optimization_history(c, zoning.optima, o.out, files);
+
+  json s = finish_summary(c, {described, zoning, plan, gouge_note, check, program, files});
   s["elapsed_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   s["version"] = kVersion;
   write_summary(o.out, s);

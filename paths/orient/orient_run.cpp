@@ -20,7 +20,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <fstream>
+#include <functional>
 #include <iostream>
 #include <mutex>
 #include <numbers>
@@ -33,210 +33,9 @@ namespace {
 constexpr double kDeg = 180 / std::numbers::pi;
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
+using Say = std::function<void(const std::string&)>;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 }  // namespace
-
-namespace {
-
-std::string count_text(double n) {
-  std::ostringstream out;
-  out.precision(3);
-  out << n;
-  return out.str();
-}
-
-// The check surfaces' area (mm²), from above: a patch counts as its longest iso-curves' product.
-double check_area(const std::vector<CheckPatch>& patches, const TriangleSoup& mesh) {
-  double area = 0;
-  for (const auto& p : patches) {
-    const auto [lu, lv] = geometry::longest_iso_curves(p.surface);
-    area += lu * lv;
-  }
-  for (const auto& t : mesh.triangles)
-    area += 0.5 * (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]).norm();
-  return area;
-}
-
-}  // namespace
-
-OrientCase parse_orient_case(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides) {
-  TomlReader r(text, origin);
-  for (const auto& o : overrides) r.apply_override(o);
-  OrientCase c;
-  c.origin = origin;
-  const std::string kind = r.choice("scene.kind", {"bump", "corner", "impeller", "panel"});
-  if (kind == "bump") {
-    BumpOptions o;
-    o.lateral = r.real("scene.lateral", Range::closed(-1e3, 1e3), o.lateral);
-    c.scene = o;
-  } else if (kind == "corner") {
-    CornerOptions o;
-    o.stick_out = r.real("scene.stick_out", Range::open_closed(0, 1e3), o.stick_out);
-    o.roll = r.real("scene.roll", Range::closed(-1.2, 1.2), o.roll);
-    c.scene = o;
-  } else if (kind == "impeller") {
-    ImpellerOptions o;
-    o.blades = static_cast<int>(r.integer("scene.blades", 2, 40, o.blades));
-    o.veins = static_cast<int>(r.integer("scene.veins", -1, 40, o.veins));
-    o.v_first = r.real("scene.v_first", Range::closed(0, 1), o.v_first);
-    o.v_last = r.real("scene.v_last", Range::closed(0, 1), o.v_last);
-    o.v_step = r.real("scene.v_step", Range::positive(), o.v_step);
-    o.lean = r.real("scene.lean", Range::closed(-0.8, 0.8), o.lean);
-    o.lead = r.real("scene.lead", Range::closed(-1, 1), o.lead);
-    o.point_spacing = r.real("scene.point_spacing", Range::positive(), o.point_spacing);
-    if (o.v_last < o.v_first) r.fail("scene.v_last", "must not be below scene.v_first");
-    const int veins = o.veins < 0 ? o.blades : std::min(o.veins, o.blades);
-    // Counted before anything is built: a step of 1e-300 must be an error, not a night of allocation.
-    const double passes = (o.v_last - o.v_first) / o.v_step * veins;
-    if (!(passes <= OrientLimits::passes))
-      r.fail("scene.v_step", "asks for " + count_text(passes) + " passes; at most " + count_text(OrientLimits::passes) + " (a larger scene.v_step, or fewer scene.veins)");
-    const double points = impeller_cl_points(o);
-    if (!(points <= OrientLimits::cl_points))
-      r.fail("scene.point_spacing", "asks for " + count_text(points) + " CL points; at most " + count_text(OrientLimits::cl_points) + " (a larger scene.point_spacing)");
-    c.scene = o;
-  } else {
-    PanelOptions o;
-    o.stepover = r.real("scene.stepover", Range::positive(), o.stepover);
-    o.lead = r.real("scene.lead", Range::closed(-1, 1), o.lead);
-    o.clamp_height = r.real("scene.clamp_height", Range::open_closed(0, 1e3), o.clamp_height);
-    const double passes = o.pocket / o.stepover;
-    if (!(passes <= OrientLimits::passes))
-      r.fail("scene.stepover", "asks for " + count_text(passes) + " passes; at most " + count_text(OrientLimits::passes));
-    c.scene = o;
-  }
-  // Extra check surfaces: patches or STL triangles (fixtures, clamps, a machine part).
-  const std::filesystem::path base = std::filesystem::path(origin).parent_path();
-  for (std::size_t i = 0, n = r.table_count("check_surfaces"); i < n; ++i) {
-    const std::string k = "check_surfaces." + std::to_string(i);
-    if (r.has(k + ".stl")) {
-      std::filesystem::path stl = r.text(k + ".stl");
-      if (stl.is_relative()) stl = base / stl;
-      c.extra_mesh.append(read_stl_triangles(stl));
-    } else {
-      const bool flip = r.boolean(k + ".flip", false);
-      const geometry::SurfaceInput s = geometry::read_surface(r, k, base);
-      c.extra_patches.push_back({k, s.surface, flip});
-    }
-  }
-  ToolAssembly& t = c.tool;
-  t = std::visit([](const auto& o) { return default_tool(o); }, c.scene);
-  const std::string cutter = r.choice("tool.kind", {"ball", "torus"}, t.cutter.kind == ToolKind::ball ? "ball" : "torus");
-  t.cutter.radius = r.real("tool.radius", Range::open_closed(0, 1e3), t.cutter.radius);
-  t.cutter.kind = cutter == "ball" ? ToolKind::ball : ToolKind::torus;
-  t.cutter.corner_radius = cutter == "ball" ? t.cutter.radius : r.real("tool.corner_radius", Range::positive(), std::min(t.cutter.corner_radius, t.cutter.radius));
-  t.flute_length = r.real("tool.flute_length", Range::open_closed(0, 1e4), t.flute_length);
-  t.shank_radius = r.real("tool.shank_radius", Range::open_closed(0, 1e3), t.shank_radius);
-  t.gauge_length = r.real("tool.gauge_length", Range::open_closed(0, 1e4), t.gauge_length);
-  if (r.has("tool.holder_z") || r.has("tool.holder_radius")) {
-    t.holder.z = r.reals("tool.holder_z", Range::closed(0, 1e4));
-    t.holder.radius = r.reals("tool.holder_radius", Range::open_closed(0, 1e3));
-  }
-  c.tool_nodes = static_cast<int>(r.integer("tool.nodes", 0, static_cast<long long>(OrientLimits::tool_nodes), c.tool_nodes));
-  c.skin_spacing = r.real("tool.skin_spacing", Range::positive(), c.skin_spacing);
-  try {
-    check_avoidance_tool(t);
-  } catch (const InputError& e) {
-    r.fail("tool", e.what());
-  }
-  if (c.tool_nodes == 0) {
-    const double nodes = tool_skin_area(t) / (c.skin_spacing * c.skin_spacing);
-    if (!(nodes <= OrientLimits::tool_nodes))
-      r.fail("tool.skin_spacing", "asks for " + count_text(nodes) + " skin nodes; at most " + count_text(OrientLimits::tool_nodes));
-  }
-  std::visit([&](auto& o) { o.tool = t; }, c.scene);
-  // The model.
-  RecallParameters& rp = c.dynamics.recall;
-  rp.stiffness = r.real("model.k", Range::positive(), rp.stiffness);
-  rp.feed = r.real("model.feed", Range::positive(), rp.feed);
-  rp.spacing = r.real("model.d0", Range::positive(), rp.spacing);
-  c.obstacle_spacing = r.real("model.obstacle_spacing", Range::positive(), rp.spacing);
-  c.khatib.eta = r.real("model.eta", Range::positive(), c.khatib.eta);
-  c.khatib.influence_radius = r.real("model.r0", Range::open_closed(0, 1e3), c.khatib.influence_radius);
-  const std::string agg = r.choice("model.aggregation", {"F1", "F2", "F3"}, "F1");
-  c.aggregation = agg == "F1" ? Aggregation::F1 : agg == "F2" ? Aggregation::F2 : Aggregation::F3;
-  const std::string moment = r.choice("model.moment", {"G", "lever", "direction"}, "direction");
-  c.dynamics.moment = moment == "G" ? MomentModel::PointG : moment == "lever" ? MomentModel::Lever : MomentModel::Direction;
-  c.dynamics.lever_g = r.real("model.lever_g", Range::positive(), t.gauge_length - t.cutter.pivot_height());
-  c.dynamics.jerk_lag = r.real("model.jerk_lag", Range::non_negative(), 0);
-  c.dynamics.contact_offset = t.cutter.radius - t.cutter.corner_radius;  // 0 for a ball
-  c.smoothing = r.real("model.smoothing", Range::closed(0, 100), c.smoothing);
-  c.dynamics.singular_cone = r.real("model.singular_cone", Range::closed(0, 0.5), c.dynamics.singular_cone);
-  c.dynamics.singular_stiffness = r.real("model.singular_stiffness", Range::positive(), c.dynamics.singular_stiffness);
-  c.model_on = r.boolean("model.enabled", true);
-  // Integration.
-  c.dynamics.adaptive = r.choice("integration.method", {"arkode", "rk4"}, "arkode") == "arkode";
-  c.dynamics.rk4_step = r.real("integration.rk4_step", Range::positive(), c.dynamics.rk4_step);
-  c.dynamics.relative_tolerance = r.real("integration.rtol", Range::positive(), c.dynamics.relative_tolerance);
-  c.dynamics.absolute_tolerance = r.real("integration.atol", Range::positive(), c.dynamics.absolute_tolerance);
-  c.dynamics.output_step = r.real("integration.output_step", Range::positive(), c.dynamics.output_step);
-  c.dynamics.clearance_fraction = r.real("integration.clearance_fraction", Range::open_closed(0, 1), c.dynamics.clearance_fraction);
-  // The field.
-  c.voxel = r.choice("field.kind", {"direct", "voxel"}, "direct") == "voxel";
-  c.voxel_settings.voxel = r.real("field.voxel", Range::positive(), c.voxel_settings.voxel);
-  const std::string interp = r.choice("field.interpolation", {"trilinear", "triquadratic", "tricubic"}, "trilinear");
-  c.voxel_settings.interpolation = interp == "trilinear" ? VoxelInterpolation::trilinear
-                                   : interp == "triquadratic" ? VoxelInterpolation::triquadratic
-                                                              : VoxelInterpolation::tricubic;
-  c.voxel_settings.near_field = r.real("field.near_field", Range::non_negative(), c.voxel_settings.near_field);
-  if (c.voxel && c.aggregation != Aggregation::F1) r.fail("model.aggregation", "the voxel field stores F1 (the seed's eq. 4.2): use F1 or field.kind = \"direct\"");
-  // The check and the machine.
-  c.clearance.voxel = r.real("check.voxel", Range::positive(), c.clearance.voxel);
-  c.clearance.required = r.real("check.required", Range::closed(-1e3, 1e3), c.clearance.required);
-  c.clearance.gouge_spacing = r.real("check.gouge_spacing", Range::positive(), c.clearance.gouge_spacing);
-  c.machine = r.text("machine.definition", c.machine);
-  if (r.has("machine.part_origin")) {
-    const auto o = r.reals("machine.part_origin", Range::closed(-1e4, 1e4));
-    if (o.size() != 3) r.fail("machine.part_origin", "expected [x, y, z] in mm: where the scene's origin sits in the machine's table frame");
-    c.part_origin = Eigen::Vector3d(o[0], o[1], o[2]);
-  }
-  // The extra check surfaces' meshes, counted now (the scene's own surfaces are checked when built).
-  const double extra_area = check_area(c.extra_patches, c.extra_mesh);
-  if (!(extra_area / (c.obstacle_spacing * c.obstacle_spacing) <= OrientLimits::obstacle_points))
-    r.fail("model.obstacle_spacing", "meshes the check surfaces into " + count_text(extra_area / (c.obstacle_spacing * c.obstacle_spacing)) + " points; at most " +
-                                         count_text(OrientLimits::obstacle_points));
-  r.finish();
-  c.resolved = r.resolved_text();
-  return c;
-}
-
-OrientCase load_orient_case(const std::filesystem::path& path, const std::vector<std::string>& overrides) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": cannot open the case file");
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_orient_case(text.str(), path.string(), overrides);
-}
-
-OrientScene build_orient_scene(const OrientCase& c) {
-  OrientScene scene = std::visit(
-      [](const auto& o) {
-        using Options = std::decay_t<decltype(o)>;
-        if constexpr (std::is_same_v<Options, BumpOptions>) return bump_scene(o);
-        else if constexpr (std::is_same_v<Options, CornerOptions>) return corner_scene(o);
-        else if constexpr (std::is_same_v<Options, ImpellerOptions>) return impeller_scene(o);
-        else return panel_scene(o);
-      },
-      c.scene);
-  scene.check_patches.insert(scene.check_patches.end(), c.extra_patches.begin(), c.extra_patches.end());
-  scene.check_mesh.append(c.extra_mesh);
-  // What the meshes and grids of the run would hold (OrientLimits).
-  const double area = check_area(scene.check_patches, scene.check_mesh);
-  const std::string where = c.origin.string() + ": ";
-  const double points = area / (c.obstacle_spacing * c.obstacle_spacing);
-  if (!(points <= OrientLimits::obstacle_points))
-    throw InputError(where + "model.obstacle_spacing: meshes the check surfaces (" + count_text(area) + " mm²) into " + count_text(points) + " points; at most " +
-                     count_text(OrientLimits::obstacle_points));
-  if (c.voxel) {
-    const double h = c.voxel_settings.voxel, voxels = area * 2 * c.khatib.influence_radius / (h * h * h);
-    if (!(voxels <= OrientLimits::voxels))
-      throw InputError(where + "field.voxel: the force field around the check surfaces would hold " + count_text(voxels) + " voxels; at most " + count_text(OrientLimits::voxels));
-  }
-  const double h = c.clearance.voxel, band = body_profile(scene.tool).max_radius() + std::max(c.clearance.required, 0.0) + 10;
-  const double band_voxels = area * 2 * (band + 2 * h) / (h * h * h);
-  if (!(band_voxels <= OrientLimits::voxels))
-    throw InputError(where + "check.voxel: the distance check's band would hold " + count_text(band_voxels) + " voxels; at most " + count_text(OrientLimits::voxels));
-  return scene;
-}
 
 namespace {
 
@@ -335,38 +134,26 @@ std::optional<Eigen::Vector2d> free_start(const ClearanceChecker& checker, const
   return std::nullopt;  // none within 90°: the programmed start, and the check will report it
 }
 
-}  // namespace
-
-OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
-  const OrientScene scene = build_orient_scene(c);
+// Stage 1: the machine, with the tool's length and the part's origin; a tool longer than the Z stroke
+// cannot be mounted.
+machine::Machine mount_on_machine(const OrientCase& c, const OrientScene& scene, Eigen::Vector3d& origin) {
   const ToolAssembly& tool = scene.tool;
-  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
-  auto say = [&](const std::string& line) {
-    if (!options.quiet) std::cout << line << std::endl;
-  };
-  // The machine first: a tool longer than the Z stroke cannot be mounted.
-  const Eigen::Vector3d origin = c.part_origin.value_or(scene.part_origin);
+  origin = c.part_origin.value_or(scene.part_origin);
   std::ostringstream setup_origin;
   setup_origin << std::fixed;
   setup_origin.precision(9);
   setup_origin << "setup.part_origin=[" << origin.x() << ", " << origin.y() << ", " << origin.z() << "]";
   machine::Machine m = machine::load_machine(c.machine, {"setup.tool_length=" + std::to_string(tool.length()), setup_origin.str()});
-  {
-    const int z = m.joint_of('Z');
-    if (z >= 0 && tool.length() >= m.axes[z].max - m.axes[z].min)
-      throw InputError(c.origin.string() + ": tool: " + std::to_string(tool.length()) + " mm from tip to holder top is longer than the Z stroke of " + m.name + " (" +
-                       std::to_string(m.axes[z].max - m.axes[z].min) + " mm)");
-  }
-  const machine::Kinematics kin(m);
-  DynamicsSettings dynamics = c.dynamics;
-  dynamics.singular_direction = kin.singular_direction();
+  const int z = m.joint_of('Z');
+  if (z >= 0 && tool.length() >= m.axes[z].max - m.axes[z].min)
+    throw InputError(c.origin.string() + ": tool: " + std::to_string(tool.length()) + " mm from tip to holder top is longer than the Z stroke of " + m.name + " (" +
+                     std::to_string(m.axes[z].max - m.axes[z].min) + " mm)");
+  return m;
+}
 
-  // Precompute: obstacles, tool nodes, the distance field, the voxel field.
-  const auto t_pre = Clock::now();
-  const ObstacleCloud obstacles = scene_obstacles(scene, c.obstacle_spacing, c.khatib.influence_radius);
-  const std::vector<Eigen::Vector3d> nodes = tool_skin_nodes(tool, c.tool_nodes, c.skin_spacing);
-  const ClearanceChecker checker(scene, c.clearance);
-  // A check surface crossing the CL path: the cutter itself would cut it.
+// A check surface crossing the CL path: the cutter itself would cut it.
+void refuse_check_surfaces_on_the_path(const OrientCase& c, const OrientScene& scene, const ClearanceChecker& checker) {
+  const ToolAssembly& tool = scene.tool;
   for (std::size_t p = 0; p < scene.passes.size(); ++p) {
     const FramedPath& path = scene.passes[p];
     for (std::size_t i = 0; i < path.cl.size(); ++i) {
@@ -376,25 +163,65 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
                          std::to_string(path.s[i]) + " mm is " + std::to_string(d) + " mm from it, inside the cutter (radius " + std::to_string(tool.cutter.corner_radius) + " mm)");
     }
   }
-  const double t_distance = seconds_since(t_pre);
-  const auto t_field = Clock::now();
+}
+
+// Stage 2's result: what every pass's integration and every pose's check read.
+struct Precomputed {
+  ObstacleCloud obstacles;
+  std::vector<Eigen::Vector3d> nodes;
+  std::unique_ptr<ClearanceChecker> checker;
   std::unique_ptr<ForceField> field;
   std::unique_ptr<VoxelField> voxels;
-  if (c.voxel) {
-    voxels = std::make_unique<VoxelField>(obstacles, c.khatib, c.voxel_settings);
-  } else {
-    field = std::make_unique<DirectField>(obstacles, c.khatib, c.aggregation);
-  }
-  const ForceField& force = c.voxel ? static_cast<const ForceField&>(*voxels) : *field;
-  const double t_voxel = seconds_since(t_field);
-  say("drom orient: " + scene.description + "; " + std::to_string(obstacles.size()) + " obstacle nodes, " + std::to_string(nodes.size()) + " tool nodes, " +
-      std::to_string(scene.passes.size()) + " passes");
+  double distance_seconds = 0, voxel_seconds = 0;
+  const ForceField& force() const { return voxels ? static_cast<const ForceField&>(*voxels) : *field; }
+};
 
-  // Poses: every pass integrated (the seed's model), or the programmed axis alone.
+// Stage 2: obstacles, tool nodes, the distance field (and the path checked against it), the force field.
+Precomputed precompute(const OrientCase& c, const OrientScene& scene) {
+  Precomputed pre;
+  const auto t_pre = Clock::now();
+  pre.obstacles = scene_obstacles(scene, c.obstacle_spacing, c.khatib.influence_radius);
+  pre.nodes = tool_skin_nodes(scene.tool, c.tool_nodes, c.skin_spacing);
+  pre.checker = std::make_unique<ClearanceChecker>(scene, c.clearance);
+  refuse_check_surfaces_on_the_path(c, scene, *pre.checker);
+  pre.distance_seconds = seconds_since(t_pre);
+  const auto t_field = Clock::now();
+  if (c.voxel) pre.voxels = std::make_unique<VoxelField>(pre.obstacles, c.khatib, c.voxel_settings);
+  else pre.field = std::make_unique<DirectField>(pre.obstacles, c.khatib, c.aggregation);
+  pre.voxel_seconds = seconds_since(t_field);
+  return pre;
+}
+
+// The programmed axis sampled like the integrated one (the model off).
+AxisHistory programmed_axis(const OrientCase& c, const FramedPath& path) {
+  AxisHistory h;
+  const int n = std::max(2, static_cast<int>(std::ceil(path.length() / c.dynamics.output_step)) + 1);
+  for (int i = 0; i < n; ++i) {
+    AxisSample a;
+    a.s = path.length() * i / (n - 1);
+    const FramedPath::Frame fr = path.at(a.s);
+    a.roll = fr.roll_prog;
+    a.pitch = fr.pitch_prog;
+    a.axis = a.programmed_axis = tool_rotation(fr, a.roll, a.pitch).col(2);
+    a.cl = a.programmed_cl = reference_point(fr, a.axis, c.dynamics.contact_offset);
+    h.samples.push_back(a);
+  }
+  return h;
+}
+
+// Stage 3's result.
+struct Integration {
+  int moved_starts = 0;
+  long evaluations = 0, steps = 0;
+  double seconds = 0;
+};
+
+// Stage 3: every pass integrated (the seed's model), or the programmed axis alone. Passes are
+// independent (each starts from its own settled start): integrated in parallel.
+Integration integrate_passes(const OrientCase& c, const OrientScene& scene, const Precomputed& pre, const DynamicsSettings& dynamics, tbb::task_arena& arena,
+                             const Say& say, bool quiet, std::vector<AxisHistory>& passes) {
   const auto t_poses = Clock::now();
-  OrientResult result;
-  result.passes.resize(scene.passes.size());
-  // Passes are independent (each starts from its own settled start): integrated in parallel.
+  passes.resize(scene.passes.size());
   std::atomic<std::size_t> finished{0};
   std::atomic<int> moved_starts{0};
   std::mutex progress;
@@ -402,163 +229,220 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   const auto one_pass = [&](std::size_t p) {
     if (c.model_on) {
       const std::optional<Eigen::Vector2d> start =
-          dynamics.settle_start ? free_start(checker, scene.passes[p], c.dynamics.contact_offset, std::max(c.clearance.required, 0.0) + kFreeStartMargin)
+          dynamics.settle_start ? free_start(*pre.checker, scene.passes[p], c.dynamics.contact_offset, std::max(c.clearance.required, 0.0) + kFreeStartMargin)
                                 : std::nullopt;
       if (start) ++moved_starts;
-      result.passes[p] = integrate_axis(scene.passes[p], nodes, force, dynamics, start);
-      if (c.smoothing > 0) smooth_axis(result.passes[p], scene.passes[p], c.smoothing, dynamics);
+      passes[p] = integrate_axis(scene.passes[p], pre.nodes, pre.force(), dynamics, start);
+      if (c.smoothing > 0) smooth_axis(passes[p], scene.passes[p], c.smoothing, dynamics);
     } else {
-      // The programmed axis sampled like the integrated one.
-      const FramedPath& path = scene.passes[p];
-      const int n = std::max(2, static_cast<int>(std::ceil(path.length() / c.dynamics.output_step)) + 1);
-      for (int i = 0; i < n; ++i) {
-        AxisSample a;
-        a.s = path.length() * i / (n - 1);
-        const FramedPath::Frame fr = path.at(a.s);
-        a.roll = fr.roll_prog;
-        a.pitch = fr.pitch_prog;
-        a.axis = a.programmed_axis = tool_rotation(fr, a.roll, a.pitch).col(2);
-        a.cl = a.programmed_cl = reference_point(fr, a.axis, c.dynamics.contact_offset);
-        result.passes[p].samples.push_back(a);
-      }
+      passes[p] = programmed_axis(c, scene.passes[p]);
     }
     const std::size_t done = ++finished;
-    if (!options.quiet && done % tenth == 0) {
+    if (!quiet && done % tenth == 0) {
       const std::lock_guard lock(progress);
       say("  " + std::to_string(done) + "/" + std::to_string(scene.passes.size()) + " passes");
     }
   };
   arena.execute([&] { tbb::parallel_for(std::size_t(0), scene.passes.size(), one_pass); });
-  long evaluations = 0, steps = 0;
-  for (const auto& h : result.passes) {
-    evaluations += h.rhs_evaluations;
-    steps += h.steps;
+  Integration r;
+  r.moved_starts = moved_starts.load();
+  for (const auto& h : passes) {
+    r.evaluations += h.rhs_evaluations;
+    r.steps += h.steps;
   }
-  const double t_pose = seconds_since(t_poses);
+  r.seconds = seconds_since(t_poses);
+  return r;
+}
 
-  // The proof: clearance and gouging of the corrected and of the programmed axes.
+// The result's CL points, axes and arc lengths, pass by pass, after the model and as programmed.
+struct PassPoses {
+  std::vector<std::vector<Eigen::Vector3d>> cl, cl_before, after, before;
+  std::vector<std::vector<double>> s;
+};
+
+PassPoses pass_poses(const std::vector<AxisHistory>& passes) {
+  PassPoses q;
+  for (auto* v : {&q.cl, &q.cl_before, &q.after, &q.before}) v->resize(passes.size());
+  q.s.resize(passes.size());
+  for (std::size_t p = 0; p < passes.size(); ++p)
+    for (const auto& a : passes[p].samples) {
+      q.cl[p].push_back(a.cl);
+      q.cl_before[p].push_back(a.programmed_cl);
+      q.after[p].push_back(a.axis);
+      q.before[p].push_back(a.programmed_axis);
+      q.s[p].push_back(a.s);
+    }
+  return q;
+}
+
+// Stage 4, the proof: clearance and gouging of the corrected and of the programmed axes.
+struct ProofTimes {
+  double after = 0, before = 0;
+};
+
+ProofTimes prove_clearance(const ClearanceChecker& checker, const PassPoses& q, tbb::task_arena& arena, OrientResult& result) {
+  ProofTimes t;
   const auto t_check = Clock::now();
-  std::vector<std::vector<Eigen::Vector3d>> cl(result.passes.size()), cl_before(result.passes.size()), after(result.passes.size()), before(result.passes.size());
-  std::vector<std::vector<double>> s(result.passes.size());
-  for (std::size_t p = 0; p < result.passes.size(); ++p)
-    for (const auto& a : result.passes[p].samples) {
-      cl[p].push_back(a.cl);
-      cl_before[p].push_back(a.programmed_cl);
-      after[p].push_back(a.axis);
-      before[p].push_back(a.programmed_axis);
-      s[p].push_back(a.s);
-    }
-  arena.execute([&] { result.after = checker.check_all(cl, after, s); });
-  const double t_clear = seconds_since(t_check);
+  arena.execute([&] { result.after = checker.check_all(q.cl, q.after, q.s); });
+  t.after = seconds_since(t_check);
   const auto t_check_before = Clock::now();
-  arena.execute([&] { result.before = checker.check_all(cl_before, before, s); });
-  const double t_clear_before = seconds_since(t_check_before);
+  arena.execute([&] { result.before = checker.check_all(q.cl_before, q.before, q.s); });
+  t.before = seconds_since(t_check_before);
+  return t;
+}
 
-  // The machine: axes along the result, before and after, and the cycle times.
-  std::vector<std::vector<machine::ClPose>> poses_after(cl.size()), poses_before(cl.size());
-  for (std::size_t p = 0; p < cl.size(); ++p)
-    for (std::size_t i = 0; i < cl[p].size(); ++i) {
-      poses_after[p].push_back({cl[p][i] - tool.cutter.pivot_height() * after[p][i], after[p][i]});
-      poses_before[p].push_back({cl_before[p][i] - tool.cutter.pivot_height() * before[p][i], before[p][i]});
-    }
-  const double feed = c.dynamics.recall.feed;
-  json machine_json;
+// Stage 5's result: the machine's view of the result and of the programmed axes.
+struct OnMachine {
   std::vector<AxisKinematics> axes_after;
   double ratio_after[3] = {0, 0, 0}, ratio_before[3] = {0, 0, 0};
-  for (std::size_t p = 0; p < cl.size(); ++p) {
-    axes_after.push_back(rotary_kinematics(kin, poses_after[p], s[p], feed));
-    const AxisKinematics b = rotary_kinematics(kin, poses_before[p], s[p], feed);
+  machine::ClProgram program_after;
+  std::vector<std::string> unreachable_before;
+  double cycle_after = 0, cycle_before = 0;
+};
+
+// Stage 5: the rotary axes along the result, before and after, their reach and the cycle times. A pose
+// out of the machine's reach is reported with the rest, not thrown: the computation behind it (a
+// quarter of an hour on the full impeller) is the programmer's to look at.
+OnMachine put_on_machine(const OrientCase& c, const ToolAssembly& tool, const machine::Kinematics& kin, const PassPoses& q, OrientResult& result) {
+  const machine::Machine& m = kin.machine();
+  std::vector<std::vector<machine::ClPose>> poses_after(q.cl.size()), poses_before(q.cl.size());
+  for (std::size_t p = 0; p < q.cl.size(); ++p)
+    for (std::size_t i = 0; i < q.cl[p].size(); ++i) {
+      poses_after[p].push_back({q.cl[p][i] - tool.cutter.pivot_height() * q.after[p][i], q.after[p][i]});
+      poses_before[p].push_back({q.cl_before[p][i] - tool.cutter.pivot_height() * q.before[p][i], q.before[p][i]});
+    }
+  const double feed = c.dynamics.recall.feed;
+  OnMachine on;
+  for (std::size_t p = 0; p < q.cl.size(); ++p) {
+    on.axes_after.push_back(rotary_kinematics(kin, poses_after[p], q.s[p], feed));
+    const AxisKinematics b = rotary_kinematics(kin, poses_before[p], q.s[p], feed);
     for (int d = 0; d < 3; ++d) {
-      ratio_after[d] = std::max(ratio_after[d], axes_after.back().worst_ratio[d]);
-      ratio_before[d] = std::max(ratio_before[d], b.worst_ratio[d]);
+      on.ratio_after[d] = std::max(on.ratio_after[d], on.axes_after.back().worst_ratio[d]);
+      on.ratio_before[d] = std::max(on.ratio_before[d], b.worst_ratio[d]);
     }
   }
-  const machine::ClProgram program_after = cl_program(poses_after, feed), program_before = cl_program(poses_before, feed);
-  const machine::ClOnMachine on_after = machine::cl_to_machine_program(program_after, kin), on_before = machine::cl_to_machine_program(program_before, kin);
-  // A pose out of the machine's reach is reported with the rest, not thrown: the computation behind it
-  // (a quarter of an hour on the full impeller) is the programmer's to look at.
-  const auto reach = [&](const machine::ClOnMachine& on) {
+  on.program_after = cl_program(poses_after, feed);
+  const machine::ClProgram program_before = cl_program(poses_before, feed);
+  const machine::ClOnMachine on_after = machine::cl_to_machine_program(on.program_after, kin), on_before = machine::cl_to_machine_program(program_before, kin);
+  const auto reach = [&](const machine::ClOnMachine& placed) {
     std::vector<std::string> list;
-    for (const auto& v : on.joints.violations) list.push_back("CL point " + std::to_string(v.pose) + " on " + m.name + ": " + v.what);
+    for (const auto& v : placed.joints.violations) list.push_back("CL point " + std::to_string(v.pose) + " on " + m.name + ": " + v.what);
     return list;
   };
   result.unreachable = reach(on_after);
-  const std::vector<std::string> unreachable_before = reach(on_before);
-  const double cycle_after = machine::predict_feed(on_after.program, kin).cycle_time;
-  const double cycle_before = machine::predict_feed(on_before.program, kin).cycle_time;
+  on.unreachable_before = reach(on_before);
+  on.cycle_after = machine::predict_feed(on_after.program, kin).cycle_time;
+  on.cycle_before = machine::predict_feed(on_before.program, kin).cycle_time;
+  return on;
+}
 
-  // Summary.
-  double max_dev = 0, max_rate = 0, max_acc = 0, max_jerk = 0, path_length = 0;
-  for (const auto& h : result.passes) {
-    if (!h.samples.empty()) path_length += h.samples.back().s;
+// The result's extremes: the axis's deviation from the programmed one and its rate, acceleration and
+// jerk, and the path's length.
+struct OrientationExtremes {
+  double deviation = 0, rate = 0, acceleration = 0, jerk = 0, path_length = 0;
+};
+
+OrientationExtremes orientation_extremes(const std::vector<AxisHistory>& passes) {
+  OrientationExtremes e;
+  for (const auto& h : passes) {
+    if (!h.samples.empty()) e.path_length += h.samples.back().s;
     for (const auto& a : h.samples) {
-      max_dev = std::max(max_dev, std::acos(std::clamp(a.axis.dot(a.programmed_axis), -1.0, 1.0)));
-      max_rate = std::max(max_rate, std::hypot(a.roll_rate, a.pitch_rate));
-      max_acc = std::max(max_acc, std::hypot(a.roll_acc, a.pitch_acc));
-      max_jerk = std::max(max_jerk, std::hypot(a.roll_jerk, a.pitch_jerk));
+      e.deviation = std::max(e.deviation, std::acos(std::clamp(a.axis.dot(a.programmed_axis), -1.0, 1.0)));
+      e.rate = std::max(e.rate, std::hypot(a.roll_rate, a.pitch_rate));
+      e.acceleration = std::max(e.acceleration, std::hypot(a.roll_acc, a.pitch_acc));
+      e.jerk = std::max(e.jerk, std::hypot(a.roll_jerk, a.pitch_jerk));
     }
   }
+  return e;
+}
+
+json clearance_report_json(const ClearanceReport& r) {
+  json v = json::array();
+  for (std::size_t k = 0; k < std::min<std::size_t>(r.collisions.size(), 200); ++k)
+    v.push_back({{"pass", r.collisions[k].pass}, {"s_mm", r.collisions[k].s}, {"clearance_mm", r.collisions[k].value}});
+  json g = json::array();
+  for (std::size_t k = 0; k < std::min<std::size_t>(r.gouges.size(), 200); ++k)
+    g.push_back({{"pass", r.gouges[k].pass}, {"s_mm", r.gouges[k].s}, {"depth_mm", r.gouges[k].value}});
+  return json{{"poses", r.poses}, {"worst_clearance_mm", r.worst_clearance}, {"collisions", r.collisions.size()}, {"worst_gouge_mm", r.worst_gouge},
+              {"gouges", r.gouges.size()}, {"collision_list", v}, {"gouge_list", g}};
+}
+
+json machine_json(const machine::Machine& m, const Eigen::Vector3d& origin, const OnMachine& on, const OrientResult& result) {
+  json j;
+  const char* names[3] = {"velocity", "acceleration", "jerk"};
+  for (int d = 0; d < 3; ++d) {
+    j["max_ratio_to_limit_after"][names[d]] = on.ratio_after[d];
+    j["max_ratio_to_limit_programmed"][names[d]] = on.ratio_before[d];
+  }
+  j["name"] = m.name;
+  j["part_origin_mm"] = {origin.x(), origin.y(), origin.z()};
+  j["cycle_time_programmed_s"] = on.cycle_before;
+  j["cycle_time_after_s"] = on.cycle_after;
+  const auto first_of = [](const std::vector<std::string>& list) {
+    return std::vector<std::string>(list.begin(), list.begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(list.size(), 20)));
+  };
+  j["unreachable_poses_after"] = result.unreachable.size();
+  j["unreachable_list_after"] = first_of(result.unreachable);
+  j["unreachable_poses_programmed"] = on.unreachable_before.size();
+  j["unreachable_list_programmed"] = first_of(on.unreachable_before);
+  return j;
+}
+
+// Everything the summary reports, by name.
+struct OrientFigures {
+  const OrientScene& scene;
+  const Precomputed& pre;
+  const Integration& integration;
+  const ProofTimes& proof;
+  const OnMachine& on;
+  const machine::Machine& machine;
+  const Eigen::Vector3d& origin;
+  int threads = 0;
+};
+
+json orient_summary(const OrientCase& c, const OrientFigures& f, const OrientResult& result) {
+  const OrientationExtremes e = orientation_extremes(result.passes);
+  const OrientScene& scene = f.scene;
   json j;
   j["command"] = "orient";
   j["case"] = c.origin.string();
-  j["scene"] = {{"name", scene.name}, {"description", scene.description}, {"passes", scene.passes.size()}, {"path_length_mm", path_length},
+  j["scene"] = {{"name", scene.name}, {"description", scene.description}, {"passes", scene.passes.size()}, {"path_length_mm", e.path_length},
                 {"check_patches", scene.check_patches.size()}, {"check_triangles", scene.check_mesh.triangles.size()}};
   j["model"] = {{"enabled", c.model_on}, {"k_N_mm_per_rad", c.dynamics.recall.stiffness}, {"omega0_rad_s", c.dynamics.recall.omega0()},
                 {"J_N_mm_s2", c.dynamics.recall.inertia()}, {"c_N_mm_s", c.dynamics.recall.damping()}, {"eta_N_mm3", c.khatib.eta},
                 {"r0_mm", c.khatib.influence_radius}, {"aggregation", aggregation_name(c.aggregation)}, {"moment", moment_model_name(c.dynamics.moment)},
-                {"jerk_lag_s", c.dynamics.jerk_lag}, {"obstacle_nodes", obstacles.size()}, {"tool_nodes", nodes.size()},
-                {"integrator", c.dynamics.adaptive ? "ARKODE Dormand-Prince 4(5)" : "RK4"}, {"rhs_evaluations", evaluations}, {"steps", steps},
-                {"starts_moved_clear", moved_starts.load()}, {"singular_cone_rad", c.dynamics.singular_cone}, {"smoothing_mm", c.smoothing}};
+                {"jerk_lag_s", c.dynamics.jerk_lag}, {"obstacle_nodes", f.pre.obstacles.size()}, {"tool_nodes", f.pre.nodes.size()},
+                {"integrator", c.dynamics.adaptive ? "ARKODE Dormand-Prince 4(5)" : "RK4"}, {"rhs_evaluations", f.integration.evaluations},
+                {"steps", f.integration.steps}, {"starts_moved_clear", f.integration.moved_starts}, {"singular_cone_rad", c.dynamics.singular_cone},
+                {"smoothing_mm", c.smoothing}};
   if (c.voxel)
     j["field"] = {{"kind", "voxel"}, {"voxel_mm", c.voxel_settings.voxel}, {"interpolation", interpolation_name(c.voxel_settings.interpolation)},
-                  {"near_field_voxels", c.voxel_settings.near_field},
-                  {"stored_corners", voxels->stored_corners()}, {"pruned_material_corners", voxels->pruned_material_corners()}, {"memory_bytes", voxels->memory_bytes()}};
+                  {"near_field_voxels", c.voxel_settings.near_field}, {"stored_corners", f.pre.voxels->stored_corners()},
+                  {"pruned_material_corners", f.pre.voxels->pruned_material_corners()}, {"memory_bytes", f.pre.voxels->memory_bytes()}};
   else
     j["field"] = {{"kind", "direct"}};
-  j["orientation"] = {{"max_deviation_deg", max_dev * kDeg}, {"max_rate_rad_s", max_rate}, {"max_acceleration_rad_s2", max_acc}, {"max_jerk_rad_s3", max_jerk}};
-  auto report_json = [](const ClearanceReport& r) {
-    json v = json::array();
-    for (std::size_t k = 0; k < std::min<std::size_t>(r.collisions.size(), 200); ++k)
-      v.push_back({{"pass", r.collisions[k].pass}, {"s_mm", r.collisions[k].s}, {"clearance_mm", r.collisions[k].value}});
-    json g = json::array();
-    for (std::size_t k = 0; k < std::min<std::size_t>(r.gouges.size(), 200); ++k)
-      g.push_back({{"pass", r.gouges[k].pass}, {"s_mm", r.gouges[k].s}, {"depth_mm", r.gouges[k].value}});
-    return json{{"poses", r.poses}, {"worst_clearance_mm", r.worst_clearance}, {"collisions", r.collisions.size()}, {"worst_gouge_mm", r.worst_gouge},
-                {"gouges", r.gouges.size()}, {"collision_list", v}, {"gouge_list", g}};
-  };
-  j["clearance"] = {{"required_mm", c.clearance.required}, {"distance_voxel_mm", c.clearance.voxel}, {"after", report_json(result.after)},
-                    {"programmed_axis", report_json(result.before)}};
-  const char* names[3] = {"velocity", "acceleration", "jerk"};
-  for (int d = 0; d < 3; ++d) {
-    machine_json["max_ratio_to_limit_after"][names[d]] = ratio_after[d];
-    machine_json["max_ratio_to_limit_programmed"][names[d]] = ratio_before[d];
-  }
-  machine_json["name"] = m.name;
-  machine_json["part_origin_mm"] = {origin.x(), origin.y(), origin.z()};
-  machine_json["cycle_time_programmed_s"] = cycle_before;
-  machine_json["cycle_time_after_s"] = cycle_after;
-  const auto first_of = [](const std::vector<std::string>& list) {
-    return std::vector<std::string>(list.begin(), list.begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(list.size(), 20)));
-  };
-  machine_json["unreachable_poses_after"] = result.unreachable.size();
-  machine_json["unreachable_list_after"] = first_of(result.unreachable);
-  machine_json["unreachable_poses_programmed"] = unreachable_before.size();
-  machine_json["unreachable_list_programmed"] = first_of(unreachable_before);
-  j["machine"] = machine_json;
-  j["timing_s"] = {{"distance_field", t_distance}, {"voxel_field", t_voxel}, {"poses", t_pose}, {"clearance_check", t_clear},
-                   {"clearance_check_programmed", t_clear_before}, {"threads", arena.max_concurrency()}};
+  j["orientation"] = {{"max_deviation_deg", e.deviation * kDeg}, {"max_rate_rad_s", e.rate}, {"max_acceleration_rad_s2", e.acceleration}, {"max_jerk_rad_s3", e.jerk}};
+  j["clearance"] = {{"required_mm", c.clearance.required}, {"distance_voxel_mm", c.clearance.voxel}, {"after", clearance_report_json(result.after)},
+                    {"programmed_axis", clearance_report_json(result.before)}};
+  j["machine"] = machine_json(f.machine, f.origin, f.on, result);
+  j["timing_s"] = {{"distance_field", f.pre.distance_seconds}, {"voxel_field", f.pre.voxel_seconds}, {"poses", f.integration.seconds}, {"clearance_check", f.proof.after},
+                   {"clearance_check_programmed", f.proof.before}, {"threads", f.threads}};
   j["verdict"] = !result.after.collisions.empty() ? "COLLISIONS" : !result.unreachable.empty() ? "OUT OF THE MACHINE'S REACH" : "collision-free";
-  result.summary = j;
-  say("  max deviation " + std::to_string(max_dev * kDeg) + " deg; worst clearance " + std::to_string(result.after.worst_clearance) + " mm (" +
-      std::to_string(result.after.collisions.size()) + " violations; programmed axis: " + std::to_string(result.before.worst_clearance) + " mm, " +
-      std::to_string(result.before.collisions.size()) + " violations); cycle time " + std::to_string(cycle_before) + " -> " + std::to_string(cycle_after) + " s");
-  if (!options.write_files) return result;
+  return j;
+}
 
-  // Files.
-  const std::filesystem::path& out = options.out;
-  std::filesystem::create_directories(out);
-  write_file_atomically(out / "cl.csv", machine::cl_csv(program_after));
-  if (result.unreachable.empty()) write_file_atomically(out / "program.ngc", machine::post_process(program_after, kin, {"drom orient " + scene.name}));
+std::string result_line(const OrientResult& result, const OnMachine& on) {
+  const OrientationExtremes e = orientation_extremes(result.passes);
+  return "  max deviation " + std::to_string(e.deviation * kDeg) + " deg; worst clearance " + std::to_string(result.after.worst_clearance) + " mm (" +
+         std::to_string(result.after.collisions.size()) + " violations; programmed axis: " + std::to_string(result.before.worst_clearance) + " mm, " +
+         std::to_string(result.before.collisions.size()) + " violations); cycle time " + std::to_string(on.cycle_before) + " -> " + std::to_string(on.cycle_after) + " s";
+}
+
+// Stage 6, the tables: the CL path with the angles, clearance and gouge (path.vtp), the tool's axis
+// every 5 mm (poses.vtp), the angles and the rotary axes along s (angles.csv, axes.csv).
+void write_orient_tables(const std::filesystem::path& out, const OrientScene& scene, const machine::Machine& m, const OrientResult& result,
+                         const std::vector<AxisKinematics>& axes_after) {
+  const ToolAssembly& tool = scene.tool;
   std::ostringstream angles, axes;
   angles << "pass,s_mm,theta_f_rad,theta_t_rad,dtheta_f_rad_s,dtheta_t_rad_s,ddtheta_f_rad_s2,ddtheta_t_rad_s2,dddtheta_f_rad_s3,dddtheta_t_rad_s3,deviation_deg,"
             "active_nodes,clearance_mm,gouge_mm\n";
@@ -569,7 +453,6 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   Polylines lines;
   std::vector<Eigen::Vector3d> points;
   std::vector<double> theta_f, theta_t, clearance, gouge, deviation;
-  Eigen::VectorXd axis_after, axis_before;
   std::vector<Eigen::Vector3d> after_all, before_all;
   Polylines poses;
   std::vector<Eigen::Vector3d> pose_points;
@@ -627,20 +510,21 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   write_polylines_vtp(out / "poses.vtp", poses);
   write_file_atomically(out / "angles.csv", angles.str());
   write_file_atomically(out / "axes.csv", axes.str());
-  std::vector<std::string> files{"cl.csv", "path.vtp", "poses.vtp", "angles.csv", "axes.csv"};
-  if (result.unreachable.empty()) files.insert(files.begin() + 1, "program.ngc");
-  // θ and its derivatives along s for the pass that deviates most.
+}
+
+// Stage 6, the pictures: θ and its derivatives along s for the pass that deviates most.
+void write_angle_plots(const std::filesystem::path& out, const OrientScene& scene, const std::vector<AxisHistory>& passes, std::vector<std::string>& files) {
   std::size_t worst = 0;
   double worst_dev = -1;
-  for (std::size_t p = 0; p < result.passes.size(); ++p)
-    for (const auto& a : result.passes[p].samples) {
+  for (std::size_t p = 0; p < passes.size(); ++p)
+    for (const auto& a : passes[p].samples) {
       const double d = std::acos(std::clamp(a.axis.dot(a.programmed_axis), -1.0, 1.0));
       if (d > worst_dev) {
         worst_dev = d;
         worst = p;
       }
     }
-  const auto& h = result.passes[worst].samples;
+  const auto& h = passes[worst].samples;
   const char* titles[4] = {"theta (rad)", "theta rate (rad/s)", "theta acceleration (rad/s^2)", "theta jerk (rad/s^3)"};
   const char* stems[4] = {"angles.png", "angle_rates.png", "angle_accelerations.png", "angle_jerks.png"};
   for (int d = 0; d < 4; ++d) {
@@ -659,10 +543,45 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
     plot.series = {f, t};
     if (write_png_plot(out / stems[d], plot)) files.push_back(stems[d]);
   }
-  j["files"] = files;
-  j["resolved_case"] = c.resolved;
-  result.summary = j;
-  write_summary(out, j);
+}
+
+}  // namespace
+
+OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
+  const OrientScene scene = build_orient_scene(c);
+  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+  const Say say = [&](const std::string& line) {
+    if (!options.quiet) std::cout << line << std::endl;
+  };
+  Eigen::Vector3d origin;
+  const machine::Machine m = mount_on_machine(c, scene, origin);
+  const machine::Kinematics kin(m);
+  DynamicsSettings dynamics = c.dynamics;
+  dynamics.singular_direction = kin.singular_direction();
+
+  const Precomputed pre = precompute(c, scene);
+  say("drom orient: " + scene.description + "; " + std::to_string(pre.obstacles.size()) + " obstacle nodes, " + std::to_string(pre.nodes.size()) + " tool nodes, " +
+      std::to_string(scene.passes.size()) + " passes");
+  OrientResult result;
+  const Integration integration = integrate_passes(c, scene, pre, dynamics, arena, say, options.quiet, result.passes);
+  const PassPoses poses = pass_poses(result.passes);
+  const ProofTimes proof = prove_clearance(*pre.checker, poses, arena, result);
+  const OnMachine on = put_on_machine(c, scene.tool, kin, poses, result);
+
+  result.summary = orient_summary(c, {scene, pre, integration, proof, on, m, origin, arena.max_concurrency()}, result);
+  say(result_line(result, on));
+  if (!options.write_files) return result;
+  const std::filesystem::path& out = options.out;
+  std::filesystem::create_directories(out);
+  write_file_atomically(out / "cl.csv", machine::cl_csv(on.program_after));
+  if (result.unreachable.empty()) write_file_atomically(out / "program.ngc", machine::post_process(on.program_after, kin, {"drom orient " + scene.name}));
+  std::vector<std::string> files{"cl.csv", "path.vtp", "poses.vtp", "angles.csv", "axes.csv"};
+  if (result.unreachable.empty()) files.insert(files.begin() + 1, "program.ngc");
+  write_orient_tables(out, scene, m, result, on.axes_after);
+  write_angle_plots(out, scene, result.passes, files);
+  result.summary["files"] = files;
+  result.summary["resolved_case"] = c.resolved;
+  write_summary(out, result.summary);
   return result;
 }
 
