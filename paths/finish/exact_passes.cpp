@@ -90,9 +90,13 @@ std::vector<SurfaceContact> exact_chain(const geometry::NurbsSurface& surface, c
   return out;
 }
 
-std::vector<SurfaceContact> trace_on(const geometry::NurbsSurface& surface, const Eigen::Vector3d& m, double level, Eigen::Vector2d uv, Eigen::Vector3d point,
-                                     Eigen::Vector3d direction, Eigen::Vector3d reference, const Eigen::Vector3d& axis, double margin, double max_length,
-                                     const std::function<bool(const TracePoint&)>& needed, double tolerance) {
+std::vector<SurfaceContact> trace_on(const geometry::NurbsSurface& surface, TraceStart start, const TraceRules& rules) {
+  const Eigen::Vector3d& m = rules.plane_normal;
+  const Eigen::Vector3d& axis = rules.axis;
+  const double level = rules.level, margin = rules.margin, max_length = rules.max_length, tolerance = rules.chord_tolerance;
+  const auto& needed = rules.needed;
+  Eigen::Vector2d& uv = start.uv;
+  Eigen::Vector3d &point = start.point, &direction = start.direction, &reference = start.reference_normal;
   std::vector<SurfaceContact> out;
   if (!(direction.norm() > 0)) return out;  // no way out to follow
   const double span_u = surface.u_max() - surface.u_min(), span_v = surface.v_max() - surface.v_min();

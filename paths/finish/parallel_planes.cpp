@@ -363,9 +363,10 @@ void add_run_outs(Pass& p, const ZoneSlicer& slicer, const MachiningMesh& mesh, 
     }
     return Eigen::Vector3d(Eigen::Vector3d::Zero());
   };
-  const auto back = trace_on(surface, m, level, p.uv_back, p.cc.back(), leaving(true), p.normals.back(), s.axis, margin, s.run_out, zone_beside, tolerance);
+  const TraceRules rules{.plane_normal = m, .level = level, .axis = s.axis, .margin = margin, .max_length = s.run_out, .chord_tolerance = tolerance, .needed = zone_beside};
+  const auto back = trace_on(surface, {.uv = p.uv_back, .point = p.cc.back(), .direction = leaving(true), .reference_normal = p.normals.back()}, rules);
   left = back_in = false;
-  const auto front = trace_on(surface, m, level, p.uv_front, p.cc.front(), leaving(false), p.normals.front(), s.axis, margin, s.run_out, zone_beside, tolerance);
+  const auto front = trace_on(surface, {.uv = p.uv_front, .point = p.cc.front(), .direction = leaving(false), .reference_normal = p.normals.front()}, rules);
   // The tool cuts the material at the edge from up to `margin` past it: the step must keep the
   // bound there too.
   const auto splice = [&](const std::vector<SurfaceContact>& run, Eigen::Vector3d last, bool at_back) {

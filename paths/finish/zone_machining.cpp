@@ -11,7 +11,15 @@ ZoneMachining machine_zone(const MachiningMesh& mesh, const std::vector<int>& ce
   ZoneMachining z;
   z.zone = zone;
   z.setup = setup;
-  const PassSettings ps{s.tool, s.scallop, s.stepover, s.zigzag, setup.axis(), setup.feed(), s.exact, s.chord_tolerance, s.run_out};
+  const PassSettings ps{.tool = s.tool,
+                        .scallop = s.scallop,
+                        .stepover = s.stepover,
+                        .zigzag = s.zigzag,
+                        .axis = setup.axis(),
+                        .feed = setup.feed(),
+                        .exact = s.exact,
+                        .chord_tolerance = s.chord_tolerance,
+                        .run_out = s.run_out};
   z.passes = plan_passes(mesh, cells, ps);
   const bool machine = s.accounting == Accounting::machine;
   z.timed_lines.reserve(z.passes.size());

@@ -13,24 +13,23 @@
 
 namespace drom::paths {
 
-machine::ClPose tool_pose(const PassPoint& p, const TorusTool& tool, const Orientation& o) {
+machine::ClPose tool_pose(const PassPoint& p, const Tool& tool, const Orientation& o) {
   const Eigen::Vector3d n = p.normal.normalized();
   const Eigen::Vector3d f = (p.feed - n * n.dot(p.feed)).normalized();
   const Eigen::Vector3d b = n.cross(f);
   const Eigen::Vector3d d = std::cos(o.yaw) * f + std::sin(o.yaw) * b;
   const Eigen::Vector3d axis = std::cos(o.tilt) * n + std::sin(o.tilt) * d;
   const Eigen::Vector3d v = std::sin(o.tilt) * n - std::cos(o.tilt) * d;
-  const Eigen::Vector3d guide = p.contact + tool.corner * n;  // on S1, whatever the orientation
-  return {guide + (tool.radius - tool.corner) * v - tool.corner * axis, axis};
+  const Eigen::Vector3d guide = p.contact + tool.corner_radius * n;  // on S1, whatever the orientation
+  return {guide + (tool.radius - tool.corner_radius) * v - tool.corner_radius * axis, axis};
 }
 
-double effective_radius(const TorusTool& tool, const Orientation& o) {
-  const double s = std::sin(o.tilt), c = std::cos(o.yaw), sa = std::sin(o.yaw);
-  if (!(s > 1e-12)) return std::numeric_limits<double>::infinity();
-  return (tool.radius - tool.corner) * c * c / (s * (1 - sa * sa * s * s)) + tool.corner;
+double effective_radius(const Tool& tool, const Orientation& o) {
+  if (!(std::sin(o.tilt) > 1e-12)) return std::numeric_limits<double>::infinity();
+  return paths::effective_radius(tool, o.tilt, o.yaw);
 }
 
-double pass_time(const SurfacePass& pass, const TorusTool& tool, const std::vector<Orientation>& orientation, const machine::Kinematics& kin) {
+double pass_time(const SurfacePass& pass, const Tool& tool, const std::vector<Orientation>& orientation, const machine::Kinematics& kin) {
   machine::ClProgram cl;
   cl.origin = "pass";
   for (std::size_t i = 0; i < pass.points.size(); ++i) {
@@ -75,7 +74,7 @@ Eigen::MatrixXd bspline_basis(const std::vector<double>& s, double length, int k
 
 }  // namespace
 
-PassOrientation relax_orientation(const SurfacePass& pass, const TorusTool& tool, const std::vector<Orientation>& programmed, const machine::Kinematics& kin,
+PassOrientation relax_orientation(const SurfacePass& pass, const Tool& tool, const std::vector<Orientation>& programmed, const machine::Kinematics& kin,
                                   const RelaxationSettings& settings) {
   const std::size_t n = pass.points.size();
   if (n < 2) throw InputError("orientation relaxation: a pass needs at least two points");
@@ -115,7 +114,7 @@ PassOrientation relax_orientation(const SurfacePass& pass, const TorusTool& tool
   struct Context {
     decltype(fields)* make;
     const SurfacePass* pass;
-    const TorusTool* tool;
+    const Tool* tool;
     const machine::Kinematics* kin;
     const std::vector<Orientation>* programmed;
     int evaluations = 0;

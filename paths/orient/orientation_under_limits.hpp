@@ -38,22 +38,18 @@ struct SurfacePass {
   double feed = 1000;  // mm/min
 };
 
-// A torus (bull-nose) end mill: radius R and corner radius r (r = R: a ball).
-struct TorusTool {
-  double radius = 5, corner = 1.5;
-};
-
 // Tilt θt from the normal towards d = cos θn f + sin θn (n × f) (θn = 0: lead along the feed).
 struct Orientation {
   double tilt = 0, yaw = 0;  // rad
 };
 
-// The tool pose for a surface point: the corner circle's centre on the guide surface S1 = C + r n,
+// The tool pose for a surface point (the tool a torus, or a ball: r = R): the corner circle's centre on the guide surface S1 = C + r n,
 // the axis a = cos θt n + sin θt d, the tool tip T = S1 + (R - r) v - r a with v = sin θt n - cos θt d.
-machine::ClPose tool_pose(const PassPoint& p, const TorusTool& tool, const Orientation& o);
-// The effective radius across the feed (Herraz eq. 1.5, with the tilt as the slope s and the yaw as α).
-double effective_radius(const TorusTool& tool, const Orientation& o);
-// The scallop it leaves at a step-over on flat ground is paths/cutter/tool.hpp's flat_scallop(stepover, radius).
+machine::ClPose tool_pose(const PassPoint& p, const Tool& tool, const Orientation& o);
+// The effective radius across the feed (Herraz eq. 1.5, paths/cutter/stepover.hpp, with the tilt as
+// the slope s and the yaw as α); infinite for a torus without tilt. The scallop it leaves at a
+// step-over on flat ground is flat_scallop(stepover, radius).
+double effective_radius(const Tool& tool, const Orientation& o);
 
 struct RelaxationSettings {
   double tilt_min = 1 * 3.14159265358979323846 / 180, tilt_max = 5 * 3.14159265358979323846 / 180;  // rad
@@ -74,10 +70,10 @@ struct PassOrientation {
 
 // The programmed orientation `programmed` along each point, relaxed; throws InputError when a pose is
 // out of the machine's reach at every admissible tilt.
-PassOrientation relax_orientation(const SurfacePass& pass, const TorusTool& tool, const std::vector<Orientation>& programmed,
+PassOrientation relax_orientation(const SurfacePass& pass, const Tool& tool, const std::vector<Orientation>& programmed,
                                   const machine::Kinematics& kinematics, const RelaxationSettings& settings);
 
 // The pass's predicted time on the machine for given orientations (one per point).
-double pass_time(const SurfacePass& pass, const TorusTool& tool, const std::vector<Orientation>& orientation, const machine::Kinematics& kinematics);
+double pass_time(const SurfacePass& pass, const Tool& tool, const std::vector<Orientation>& orientation, const machine::Kinematics& kinematics);
 
 }  // namespace drom::paths

@@ -40,7 +40,7 @@ SurfacePass saddle_pass(double c, double y0, double step, double feed) {
 TEST(OrientationUnderLimits, ThePoseKeepsTheContactPointAndItsNormal) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1, 1);
-  const TorusTool tool{5, 1.5};
+  const Tool tool = Tool::torus(5, 1.5);
   for (int trial = 0; trial < 1000; ++trial) {
     PassPoint p;
     p.contact = {10 * u(rng), 10 * u(rng), 3 * u(rng)};
@@ -49,32 +49,32 @@ TEST(OrientationUnderLimits, ThePoseKeepsTheContactPointAndItsNormal) {
     const Orientation o{std::abs(u(rng)) * 30 * kDeg + 0.5 * kDeg, u(rng) * std::numbers::pi};
     const machine::ClPose pose = tool_pose(p, tool, o);
     // The torus: its corner circle (radius R - r) centred on the axis r above the tip.
-    const Eigen::Vector3d centre = pose.tip + tool.corner * pose.axis;
+    const Eigen::Vector3d centre = pose.tip + tool.corner_radius * pose.axis;
     Eigen::Vector3d radial = p.contact - centre;
     radial -= pose.axis * pose.axis.dot(radial);
-    const Eigen::Vector3d tube = centre + (tool.radius - tool.corner) * radial.normalized();
-    EXPECT_NEAR((p.contact - tube).norm(), tool.corner, 1e-12);
-    EXPECT_LE(((tube - p.contact) / tool.corner - p.normal).norm(), 1e-12);  // touching, with S's normal
-    EXPECT_LE((tube - (p.contact + tool.corner * p.normal)).norm(), 1e-12);  // on the guide surface S1
+    const Eigen::Vector3d tube = centre + (tool.radius - tool.corner_radius) * radial.normalized();
+    EXPECT_NEAR((p.contact - tube).norm(), tool.corner_radius, 1e-12);
+    EXPECT_LE(((tube - p.contact) / tool.corner_radius - p.normal).norm(), 1e-12);  // touching, with S's normal
+    EXPECT_LE((tube - (p.contact + tool.corner_radius * p.normal)).norm(), 1e-12);  // on the guide surface S1
     EXPECT_NEAR(std::acos(pose.axis.dot(p.normal)), o.tilt, 1e-12);
   }
 }
 
 TEST(OrientationUnderLimits, EffectiveRadiusAndScallopMatchTheSeeds) {
   // 003-digest §2.4 (R 5, r 1.5, lead tilt, D = 8 mm): R_eff 202.0 / 41.7 mm, scallop 0.040 / 0.192 mm at 1° / 5°.
-  const TorusTool tool{5, 1.5};
+  const Tool tool = Tool::torus(5, 1.5);
   EXPECT_NEAR(effective_radius(tool, {1 * kDeg, 0}), 202.0, 0.05);
   EXPECT_NEAR(effective_radius(tool, {5 * kDeg, 0}), 41.7, 0.05);
   EXPECT_NEAR(flat_scallop(8, effective_radius(tool, {1 * kDeg, 0})), 0.040, 0.0005);
   EXPECT_NEAR(flat_scallop(8, effective_radius(tool, {5 * kDeg, 0})), 0.192, 0.0005);
-  EXPECT_NEAR(effective_radius(tool, {5 * kDeg, std::numbers::pi / 2}), tool.corner, 1e-12);  // tilted across the feed: the corner
-  EXPECT_NEAR(effective_radius({5, 5}, {20 * kDeg, 0.3}), 5, 1e-12);                          // a ball
+  EXPECT_NEAR(effective_radius(tool, {5 * kDeg, std::numbers::pi / 2}), tool.corner_radius, 1e-12);  // tilted across the feed: the corner
+  EXPECT_NEAR(effective_radius(Tool::ball(5), {20 * kDeg, 0.3}), 5, 1e-12);                          // a ball
 }
 
 TEST(OrientationUnderLimits, ASaddlePassNearTheSingularityIsRelaxedFasterThanTheSeedsHeuristic) {
   const machine::Machine m = machine::load_machine("ucp710_like", {"control.junction=smooth", "control.junction_tolerance_rotary=0.05"});
   const machine::Kinematics kin(m);
-  const TorusTool tool{5, 1.5};
+  const Tool tool = Tool::torus(5, 1.5);
   const SurfacePass pass = saddle_pass(100, 0, 0.25, 3000);
   const std::size_t n = pass.points.size();
   // Programmed: 1° across the feed, the pass crossing the singularity's neighbourhood at x = 0.
@@ -113,11 +113,11 @@ TEST(OrientationUnderLimits, ASaddlePassNearTheSingularityIsRelaxedFasterThanThe
     if (std::abs(x + 28) < 0.2) tilt_far = relaxed.orientation[i].tilt;
     // The guide surface is kept: the corner circle's nearest centre is S + r n for every pose.
     const machine::ClPose& pose = relaxed.poses[i];
-    const Eigen::Vector3d centre = pose.tip + tool.corner * pose.axis;
+    const Eigen::Vector3d centre = pose.tip + tool.corner_radius * pose.axis;
     Eigen::Vector3d radial = pass.points[i].contact - centre;
     radial -= pose.axis * pose.axis.dot(radial);
-    EXPECT_LE((centre + (tool.radius - tool.corner) * radial.normalized() - (pass.points[i].contact + tool.corner * pass.points[i].normal)).norm(), 1e-9);
-    EXPECT_NEAR(relaxed.effective_radius[i], tool.corner, 1e-9);  // tilted across the feed: the scallop is the corner's
+    EXPECT_LE((centre + (tool.radius - tool.corner_radius) * radial.normalized() - (pass.points[i].contact + tool.corner_radius * pass.points[i].normal)).norm(), 1e-9);
+    EXPECT_NEAR(relaxed.effective_radius[i], tool.corner_radius, 1e-9);  // tilted across the feed: the scallop is the corner's
     EXPECT_TRUE(std::isinf(relaxed.gouge_margin[i]));              // convex across the feed: no gouge
   }
   EXPECT_GT(tilt_at_crossing, programmed[n / 2].tilt + 0.25 * kDeg);  // the tilt is raised where C saturated
