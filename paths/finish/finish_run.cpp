@@ -1,6 +1,8 @@
 #include "paths/finish/finish_run.hpp"
 
 #include "paths/finish/finish_outputs.hpp"
+#include "paths/cutter/stepover.hpp"
+#include "paths/finish/length_bound.hpp"
 #include "paths/finish/plane_model.hpp"
 #include "paths/finish/scallop_check.hpp"
 #include "machine/feed_prediction.hpp"
@@ -269,6 +271,29 @@ std::string report_gouges(const FinishCase& c, const FinishingPlan& plan, const 
   return note;
 }
 
+// Stage 5, the yardstick: the shortest passes any parallel-plane path keeping eq. 2.3 at every point
+// can have on this face (length_bound.hpp), against the path's. With the axis the case fixes, or Z
+// for 3-axis zoning; a 3+2 search may turn each zone, so its floor takes every point at the tool's
+// level-ground step, the widest any axis allows.
+json length_floor(const FinishCase& c, const FinishingSettings& settings, const FinishingPlan& plan, const Say& say) {
+  const bool any_axis = !c.orientation && c.optimize && c.setup != SetupMode::three_axis;
+  const Eigen::Vector3d axis = c.orientation ? tilted_setup((*c.orientation)(0), (*c.orientation)(1), 0, Eigen::Vector3d::Zero()).axis() : Eigen::Vector3d::UnitZ();
+  CuttingLengthBound floor = shortest_cutting_length(c.surface.surface, c.surface.trim, settings.tool, settings.scallop, settings.timer.cutting(), 200, axis);
+  if (any_axis) {
+    floor.length = floor.area / level_ground_stepover(settings.tool, settings.scallop);
+    floor.time = floor.length / settings.timer.cutting().feed;
+  }
+  std::ostringstream line;
+  line.precision(4);
+  line << "  passes " << plan.pass_length() << " mm against a floor of " << floor.length << " mm (" << (any_axis ? "any axis" : "this axis") << ", eq. 2.3 at every point)";
+  say(line.str());
+  return {{"length_mm", floor.length},
+          {"time_at_feed_s", floor.time},
+          {"area_mm2", floor.area},
+          {"axis", any_axis ? "any (3+2: the level-ground step everywhere)" : c.orientation ? "the case's fixed axis" : "Z"},
+          {"passes_over_floor", plan.pass_length() / floor.length}};
+}
+
 // Stage 6's program: machine/'s inverse kinematics, feed predictor and post-processor on the case's
 // machine. A program the machine cannot run is not written; the note says why.
 struct PostedProgram {
@@ -334,6 +359,7 @@ struct FinishResults {
   const std::string& gouge_note;
   const ScallopCheck& check;
   const PostedProgram& program;
+  const json& floor;
   const std::vector<std::string>& files;
 };
 
@@ -373,6 +399,7 @@ json finish_summary(const FinishCase& c, const FinishResults& r) {
   s["time_s"] = {{"total", plan.time()}, {"passes", plan.pass_time()}, {"links", plan.link_time()}, {"retracts", plan.retract_time()}, {"between_zones", plan.move_time}};
   s["length_mm"] = {{"total", plan.length()}, {"passes", plan.pass_length()}, {"links", plan.link_length()}};
   s["passes"] = plan.pass_count();
+  s["length_floor"] = r.floor;
   double run_outs = 0;
   for (const auto& z : plan.zones)
     for (const auto& p : z.passes) run_outs += p.run_out_length;
@@ -403,6 +430,7 @@ json run_finish(const FinishCase& c, const FinishRunOptions& o) {
   const FinishingPlan plan = finish_zones(described, zoning, say);
   const std::string gouge_note = report_gouges(c, plan, described.settings.tool, say);
   const ScallopCheck check = check_scallop(c.surface.surface, plan.zones, described.settings.tool, 0, 1, 0, 1, 40, 40);
+  const json floor = length_floor(c, described.settings, plan, say);
 
   std::vector<std::string> files = {"zones.vtu", "paths.vtp", "cl.csv", "breakdown.csv"};
   write_zone_map(o.out / "zones.vtu", c.surface.surface, described.problem.samples, zoning.zones);
@@ -412,7 +440,7 @@ json run_finish(const FinishCase& c, const FinishRunOptions& o) {
   const PostedProgram program = post_program(c, plan, described.settings, o.out, files, say);
   write_optimization_history(c, zoning.optima, o.out, files);
 
-  json s = finish_summary(c, {described, zoning, plan, gouge_note, check, program, files});
+  json s = finish_summary(c, {described, zoning, plan, gouge_note, check, program, floor, files});
   s["elapsed_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   s["version"] = kVersion;
   write_summary(o.out, s);

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -41,6 +42,14 @@ TEST(FinishCommand, InclinedPlaneWritesItsOutputs) {
   EXPECT_LT(s["scallop_check"]["max_gouge_mm"].get<double>(), 2e-4);
   // machine/'s feed predictor on the posted program agrees with the search's double S within 10 %.
   EXPECT_NEAR(s["predicted_cycle_time_s"].get<double>(), t["total"].get<double>(), 0.1 * t["total"].get<double>());
+  // The length floor: a ball's widest step is eq. 2.3 with R everywhere, so the floor is the face's
+  // area over that step; the posted passes are no shorter, and on a plane not much longer.
+  const auto& floor = s["length_floor"];
+  const double sh = s["scallop_mm"].get<double>(), R = 5;
+  ASSERT_EQ(s["tool"], "ball R5");
+  EXPECT_NEAR(floor["length_mm"].get<double>(), floor["area_mm2"].get<double>() / (2 * std::sqrt(2 * sh * R - sh * sh)), 1e-6);
+  EXPECT_GE(floor["passes_over_floor"].get<double>(), 1.0);
+  EXPECT_LT(floor["passes_over_floor"].get<double>(), 1.15);
 }
 
 TEST(FinishCommand, OptimisedRunResumesFromItsFinishedK) {
