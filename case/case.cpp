@@ -5,8 +5,6 @@
 #include "support/input_error.hpp"
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 namespace drom::cases {
 
@@ -252,16 +250,11 @@ void read_closed_loop(TomlReader& r, Case& c) {
 
 Case load_case(const std::optional<std::filesystem::path>& path, const std::vector<std::string>& overrides) {
   if (!path) return case_from_text(kDefaultCaseToml, "<embedded default case>", overrides);
-  std::ifstream in(*path);
-  if (!in) throw InputError(path->string() + ": cannot open case file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return case_from_text(ss.str(), path->string(), overrides);
+  return case_from_text(read_input_file(*path, "case file"), path->string(), overrides);
 }
 
 Case case_from_text(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides) {
-  TomlReader r(text, origin);
-  for (const auto& o : overrides) r.apply_override(o);
+  TomlReader r(text, origin, overrides);
 
   Case c;
   c.origin = origin;

@@ -3,8 +3,6 @@
 #include "support/toml_reader.hpp"
 #include "support/input_error.hpp"
 
-#include <fstream>
-#include <sstream>
 
 namespace drom::loop {
 
@@ -28,12 +26,7 @@ std::filesystem::path relative_to(const std::string& origin, const std::string& 
 }  // namespace
 
 DeviationCase load_deviation_case(const std::filesystem::path& path, const std::vector<std::string>& overrides) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": cannot open case file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  TomlReader r(ss.str(), path.string());
-  for (const auto& o : overrides) r.apply_override(o);
+  TomlReader r(read_input_file(path, "case file"), path.string(), overrides);
   DeviationCase c;
   c.origin = path.string();
   c.name = r.text("name");

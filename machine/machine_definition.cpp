@@ -8,10 +8,8 @@
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <numbers>
-#include <sstream>
 
 namespace drom::machine {
 
@@ -75,8 +73,7 @@ std::string Machine::rotary_letters() const {
 }
 
 Machine parse_machine(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides) {
-  TomlReader r(text, origin);
-  for (const auto& o : overrides) r.apply_override(o);
+  TomlReader r(text, origin, overrides);
   Machine m;
   m.origin = origin;
   m.name = r.text("name");
@@ -137,11 +134,7 @@ Machine parse_machine(const std::string& text, const std::string& origin, const 
 }
 
 Machine read_machine(const std::string& path, const std::vector<std::string>& overrides) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open machine file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse_machine(ss.str(), path, overrides);
+  return parse_machine(read_input_file(path, "machine file"), path, overrides);
 }
 
 std::vector<std::string> shipped_machine_names() {

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <functional>
 #include <set>
+#include <fstream>
 #include <sstream>
 
 namespace drom {
@@ -70,7 +71,19 @@ TomlReader::TomlReader(const std::string& text, std::string origin) : impl_(std:
   }
 }
 
+TomlReader::TomlReader(const std::string& text, std::string origin, const std::vector<std::string>& overrides) : TomlReader(text, std::move(origin)) {
+  for (const auto& o : overrides) apply_override(o);
+}
+
 TomlReader::~TomlReader() = default;
+
+std::string read_input_file(const std::filesystem::path& path, const std::string& what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string() + ": cannot open the " + what + " (missing or unreadable)");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
 
 void TomlReader::apply_override(const std::string& assignment) {
   const auto eq = assignment.find('=');

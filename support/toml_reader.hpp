@@ -2,6 +2,7 @@
 // Typed, validated access to a TOML input (case files, machine files). Every accessor records the key it read; finish()
 // then rejects any key nobody asked for, so a typo is an error rather than a silent default.
 // Errors are InputError naming the file, the line and the dotted key.
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -25,6 +26,8 @@ class TomlReader {
  public:
   // `origin` names the text in messages (a path, or "<embedded default case>").
   TomlReader(const std::string& text, std::string origin);
+  // The one way every case reader opens its input: the text, then the `--set` overrides in order.
+  TomlReader(const std::string& text, std::string origin, const std::vector<std::string>& overrides);
   ~TomlReader();
   TomlReader(const TomlReader&) = delete;
   TomlReader& operator=(const TomlReader&) = delete;
@@ -66,6 +69,10 @@ class TomlReader {
   std::unique_ptr<Impl> impl_;
   std::string origin_;
 };
+
+// A case, machine or settings file's text; InputError "PATH: cannot open the WHAT (missing or
+// unreadable)" otherwise. With TomlReader(text, path, overrides), what every case reader opens.
+std::string read_input_file(const std::filesystem::path& path, const std::string& what);
 
 // `text` (TOML) without the named top-level tables, with the named string keys (dotted) made absolute
 // paths relative to `base` (so the text can be written elsewhere). Deterministic: the same input

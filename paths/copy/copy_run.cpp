@@ -7,24 +7,15 @@
 #include "support/atomic_file.hpp"
 #include "support/input_error.hpp"
 #include "support/summary.hpp"
+#include "support/toml_reader.hpp"
 #include "support/vtk_fields.hpp"
 
 #include <algorithm>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 
 namespace drom::paths {
 
 namespace {
-
-std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path.string() + ": cannot open the settings file");
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 nlohmann::json vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
@@ -175,7 +166,7 @@ nlohmann::json run_copy(const CopyRunOptions& o) {
   std::vector<std::string> overrides = o.overrides;
   if (!o.tool.empty()) overrides.push_back("finishing.tool=\"" + o.tool + "\"");
   if (!o.machine.empty()) overrides.push_back("machine.name=\"" + o.machine + "\"");
-  const CopySettings s = o.settings ? read_copy_settings(read_text(*o.settings), o.settings->string(), overrides) : read_copy_settings("", "<defaults>", overrides);
+  const CopySettings s = o.settings ? read_copy_settings(read_input_file(*o.settings, "settings file"), o.settings->string(), overrides) : read_copy_settings("", "<defaults>", overrides);
   const machine::Machine m = machine::load_machine(s.machine, s.machine_overrides);
   const machine::Kinematics kinematics(m);
   const geometry::PointCloud cloud = geometry::read_cloud(o.cloud, s.scale);

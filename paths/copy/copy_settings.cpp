@@ -93,8 +93,7 @@ std::string default_copy_settings() {
 CopySettings read_copy_settings(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides) {
   CopySettings s = defaults();
   s.origin = text.empty() ? "<defaults>" : origin;
-  TomlReader r(text, s.origin);
-  for (const auto& o : overrides) r.apply_override(o);
+  TomlReader r(text, s.origin, overrides);
   s.scale = r.real("cloud.scale", Range::positive(), s.scale);
 
   s.normals.diameter = r.real("normals.sphere_diameter", Range::positive(), s.normals.diameter);

@@ -5,19 +5,13 @@
 #include "support/toml_reader.hpp"
 
 #include <cmath>
-#include <fstream>
 #include <numbers>
 #include <sstream>
 
 namespace drom::paths {
 
 FinishCase load_finish_case(const std::filesystem::path& path, const std::vector<std::string>& overrides) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": cannot open case file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  TomlReader r(text.str(), path.string());
-  for (const auto& o : overrides) r.apply_override(o);
+  TomlReader r(read_input_file(path, "case file"), path.string(), overrides);
   FinishCase c;
   c.origin = path.string();
   c.name = r.text("name");

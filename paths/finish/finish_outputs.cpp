@@ -62,7 +62,7 @@ void write_pass_polylines(const std::filesystem::path& path, const FinishingPlan
   for (const auto& z : plan.zones) {
     const Eigen::Vector3d axis = z.setup.axis();
     for (std::size_t k = 0; k < z.passes.size(); ++k) {
-      const Pass& p = z.passes[k];
+      const PlanePass& p = z.passes[k];
       for (int which = 0; which < 2; ++which) {
         vtkNew<vtkPolyLine> line;
         line->GetPointIds()->SetNumberOfIds(static_cast<vtkIdType>(p.cc.size()));
@@ -96,7 +96,7 @@ void write_cl_csv(const std::filesystem::path& path, const FinishingPlan& plan, 
   for (const auto& z : plan.zones) {
     const Eigen::Vector3d axis = z.setup.axis();
     for (std::size_t k = 0; k < z.passes.size(); ++k) {
-      const Pass& p = z.passes[k];
+      const PlanePass& p = z.passes[k];
       for (std::size_t i = 0; i < p.cc.size(); ++i) {
         const Eigen::Vector3d tip = cutter_location(p.cc[i], p.normals[i], tool, axis), m = z.setup.to_machine(tip);
         csv << z.zone << ',' << k << ',' << i << ',' << tip.x() << ',' << tip.y() << ',' << tip.z() << ',' << axis.x() << ',' << axis.y() << ',' << axis.z() << ','
@@ -121,7 +121,7 @@ machine::ClProgram cl_program(const FinishingPlan& plan, const Tool& tool, doubl
   for (const auto& z : plan.zones) {
     const Eigen::Vector3d axis = z.setup.axis();
     for (std::size_t k = 0; k < z.passes.size(); ++k) {
-      const Pass& p = z.passes[k];
+      const PlanePass& p = z.passes[k];
       std::vector<Eigen::Vector3d> tips;
       for (std::size_t i = 0; i < p.cc.size(); ++i) tips.push_back(cutter_location(p.cc[i], p.normals[i], tool, axis));
       if (k == 0 || z.retract_before[k]) {

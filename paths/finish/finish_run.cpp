@@ -255,7 +255,7 @@ std::string report_gouges(const FinishCase& c, const FinishingPlan& plan, const 
   if (gouges == 0) return "";
   Eigen::Vector3d at = Eigen::Vector3d::Zero();
   for (const auto& z : plan.zones) {
-    const auto p = std::find_if(z.passes.begin(), z.passes.end(), [](const Pass& q) { return q.gouging_contacts > 0; });
+    const auto p = std::find_if(z.passes.begin(), z.passes.end(), [](const PlanePass& q) { return q.gouging_contacts > 0; });
     if (p != z.passes.end()) {
       at = p->first_gouge;
       break;

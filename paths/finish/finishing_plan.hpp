@@ -30,7 +30,7 @@ struct FinishingPlan {
   double pass_length() const;
   double link_length() const;
   int pass_count() const;
-  // Contact points where the tool cuts into the surface beside the pass (curved model; Pass).
+  // Contact points where the tool cuts into the surface beside the pass (curved model; PlanePass).
   int gouging_contacts() const;
   double time() const { return pass_time() + link_time() + retract_time() + move_time; }
   double length() const { return pass_length() + link_length(); }

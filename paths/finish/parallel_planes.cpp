@@ -237,10 +237,10 @@ IsoCrossing iso_crossing(const MachiningMesh& mesh, const Crossing& x) {
 // One plane's passes, with the step each contact point allows. With `reach_side` (-1 or +1), also
 // how far towards that side (plane units) each pass alone keeps the bound: for the zone's first and
 // last planes.
-std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, double level, const PassSettings& s, int reach_side = 0) {
-  std::vector<Pass> passes;
+std::vector<PlanePass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, double level, const PassSettings& s, int reach_side = 0) {
+  std::vector<PlanePass> passes;
   for (const auto& chain : slicer.slice(level)) {
-    Pass p;
+    PlanePass p;
     p.level = level;
     std::vector<Eigen::Matrix3d> curvatures;
     for (const auto& x : chain) {
@@ -309,14 +309,14 @@ std::vector<Pass> passes_at(ZoneSlicer& slicer, const MachiningMesh& mesh, doubl
     p.uv_back = uv_back;
     passes.push_back(std::move(p));
   }
-  std::sort(passes.begin(), passes.end(), [&](const Pass& x, const Pass& y) { return x.cc.front().dot(s.feed) < y.cc.front().dot(s.feed); });
+  std::sort(passes.begin(), passes.end(), [&](const PlanePass& x, const PlanePass& y) { return x.cc.front().dot(s.feed) < y.cc.front().dot(s.feed); });
   return passes;
 }
 
 // The pass run on past both its ends (PassSettings::run_out), once its plane is placed: the step
 // keeps the bound inside the zone, and also over the first `margin` of each run-out, where the tool
 // cuts the edge's material from.
-void add_run_outs(Pass& p, const ZoneSlicer& slicer, const MachiningMesh& mesh, const PassSettings& s) {
+void add_run_outs(PlanePass& p, const ZoneSlicer& slicer, const MachiningMesh& mesh, const PassSettings& s) {
   if (!(s.run_out > 0) || !p.open || !mesh.surface) return;
   const double level = p.level;
   const Eigen::Vector3d m = s.axis.cross(s.feed).normalized();
@@ -396,7 +396,7 @@ void add_run_outs(Pass& p, const ZoneSlicer& slicer, const MachiningMesh& mesh, 
   splice(front, p.cc.front(), false);
 }
 
-double plane_spacing(const std::vector<Pass>& plane) {
+double plane_spacing(const std::vector<PlanePass>& plane) {
   double spacing = std::numeric_limits<double>::infinity();
   for (const auto& p : plane) spacing = std::min(spacing, p.spacing);
   return spacing;
@@ -404,8 +404,8 @@ double plane_spacing(const std::vector<Pass>& plane) {
 
 }  // namespace
 
-std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>& cells, const PassSettings& settings) {
-  std::vector<Pass> result;
+std::vector<PlanePass> plan_passes(const MachiningMesh& mesh, const std::vector<int>& cells, const PassSettings& settings) {
+  std::vector<PlanePass> result;
   if (cells.empty()) return result;
   PassSettings s = settings;
   if (s.stepover == StepoverModel::curved && s.tool.kind == ToolKind::torus && !s.profile)
@@ -417,9 +417,9 @@ std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>&
   // (5 % of the corner's step: a zone the tool gouges all over would otherwise be planned in tens
   // of thousands of planes; the seed's model keeps its own floor, which its tables were matched with.)
   const double min_spacing = (s.stepover == StepoverModel::seed ? 1e-3 : 0.05) * flat_stepover(s.scallop, s.tool.corner_radius);
-  const auto spacing_of = [&](const std::vector<Pass>& plane) { return std::max(min_spacing, plane_spacing(plane)); };
+  const auto spacing_of = [&](const std::vector<PlanePass>& plane) { return std::max(min_spacing, plane_spacing(plane)); };
   // The first plane half a step inside the zone, the step measured just inside its edge.
-  std::vector<Pass> probe = passes_at(slicer, mesh, lo + std::min(1e-3, 0.5 * extent), s, s.stepover == StepoverModel::seed ? 0 : -1);
+  std::vector<PlanePass> probe = passes_at(slicer, mesh, lo + std::min(1e-3, 0.5 * extent), s, s.stepover == StepoverModel::seed ? 0 : -1);
   double first_reach = probe.empty() ? 0.5 * extent : 0.5 * spacing_of(probe);
   if (s.stepover != StepoverModel::seed)
     for (const auto& p : probe) first_reach = std::min(first_reach, p.reach);
@@ -431,7 +431,7 @@ std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>&
     ZoneSlicer far_slicer(mesh, cells, normal);
     for (const auto& p : passes_at(far_slicer, mesh, hi - std::min(1e-3, 0.5 * extent), s, +1)) last_reach = std::min(last_reach, p.reach);
   }
-  std::vector<Pass> plane = passes_at(slicer, mesh, level, s);
+  std::vector<PlanePass> plane = passes_at(slicer, mesh, level, s);
   int index = 0;
   while (true) {
     slicer.accept(level);

@@ -56,7 +56,7 @@ struct PassSettings {
 // the seed does (they do not claim the bound on curved ground, docs/finishing.md section 5).
 double target_scallop(const PassSettings& settings);
 
-struct Pass {
+struct PlanePass {
   std::vector<Eigen::Vector3d> cc, normals;  // contact points in travel order, and the machined-side normals there
   double level = 0;             // the plane's offset along axis x feed, mm
   double worst_stepover = 0;    // the smallest step on the surface along the pass, mm
@@ -78,7 +78,7 @@ struct Pass {
 // The passes over the zone's mesh cells, in machining order (planes in increasing level; several
 // segments on one plane in travel order), zigzag alternating direction plane by plane. Empty when
 // the zone has no cell.
-std::vector<Pass> plan_passes(const MachiningMesh& mesh, const std::vector<int>& cells, const PassSettings& settings);
+std::vector<PlanePass> plan_passes(const MachiningMesh& mesh, const std::vector<int>& cells, const PassSettings& settings);
 
 // The step between adjacent passes at one contact point, measured along the surface, and the plane
 // spacing it allows; the model of plan_passes, for reports and tests.

@@ -50,7 +50,7 @@ struct ZoneSetup {
 struct ZoneMachining {
   int zone = 0;
   ZoneSetup setup;
-  std::vector<Pass> passes;
+  std::vector<PlanePass> passes;
   // The polylines timed, machine frame, one per pass: tool tips (machine accounting) or contact points (the seed's).
   std::vector<std::vector<Eigen::Vector3d>> timed_lines;
   std::vector<bool> retract_before;  // per pass: the move into it is a retract (else a link; false for the first)
@@ -58,7 +58,7 @@ struct ZoneMachining {
   double pass_length = 0, link_length = 0;
   int links = 0, retracts = 0;
   double time() const { return pass_time + link_time + retract_time; }
-  int gouging_contacts() const;  // over its passes (Pass::gouging_contacts)
+  int gouging_contacts() const;  // over its passes (PlanePass::gouging_contacts)
   double length() const { return pass_length + link_length; }
   // Where the tool enters and leaves the zone (machine frame).
   Eigen::Vector3d start() const { return timed_lines.front().front(); }

@@ -9,7 +9,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <sstream>
 #include <type_traits>
 
@@ -39,8 +38,7 @@ double check_area(const std::vector<CheckPatch>& patches, const TriangleSoup& me
 }  // namespace
 
 OrientCase parse_orient_case(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides) {
-  TomlReader r(text, origin);
-  for (const auto& o : overrides) r.apply_override(o);
+  TomlReader r(text, origin, overrides);
   OrientCase c;
   c.origin = origin;
   const std::string kind = r.choice("scene.kind", {"bump", "corner", "impeller", "panel"});
@@ -179,11 +177,7 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
 }
 
 OrientCase load_orient_case(const std::filesystem::path& path, const std::vector<std::string>& overrides) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": cannot open the case file");
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_orient_case(text.str(), path.string(), overrides);
+  return parse_orient_case(read_input_file(path, "case file"), path.string(), overrides);
 }
 
 OrientScene build_orient_scene(const OrientCase& c) {
