@@ -1,5 +1,5 @@
 // Harness: a machine file (machine/machine_definition.hpp, through support/toml_reader.hpp), then its
-// kinematics solving one pose (machine/kinematics.hpp). Seeds: machines/*.toml.
+// kinematics solving one pose (machine/kinematics.hpp). Seeds: cases/machines/*.toml.
 #include "fuzz/fuzz_input.hpp"
 #include "machine/kinematics.hpp"
 #include "machine/machine_definition.hpp"

@@ -1,5 +1,5 @@
 // drom_fuzz_seeds <corpus folder> <base folder>: the seed corpus of every harness, made from the shipped
-// cases (cases/*.toml) and machines (machines/*.toml): the case and machine files themselves, their
+// cases (cases/*.toml) and machines (cases/machines/*.toml): the case and machine files themselves, their
 // quick overrides, their toolpaths as G-code, a 5-axis CL program (APT, CSV) and its post-processed G-code,
 // their stress profiles as tables, their stock as STL, the chapter 2 blank as a measured surface,
 // and the flat plate's coarse snapshot database and light model (the base files of the *_fields
@@ -49,7 +49,7 @@ using namespace drom;
 namespace {
 
 const fs::path kCases = DROM_SOURCE_DIR "/cases";
-const fs::path kMachines = DROM_SOURCE_DIR "/machines";
+const fs::path kMachines = DROM_SOURCE_DIR "/cases/machines";
 
 // A 5-axis CL program: rapid, a tilted plunge, a swept tool axis, with continuations and comments.
 const char* kAptSeed = R"(PARTNO/SEED

@@ -1,7 +1,7 @@
 #pragma once
 // A machine tool as a machining-process engineer describes it: kinematic chain, pivot offsets, tool
 // length handling, axis strokes, per-axis velocity / acceleration / jerk limits, interpolation cycle
-// and junction tolerance. Read from a TOML file in machines/ (every key checked; docs/machine.md).
+// and junction tolerance. Read from a TOML file in cases/machines/ (every key checked; docs/machine.md).
 //
 // Frames and units. Lengths in mm, angles in radians inside drom (degrees in files and programs),
 // time in s. The program frame is the frame of the program's X, Y, Z words (the work offset, G54),
@@ -77,7 +77,7 @@ struct Machine {
 Machine read_machine(const std::string& path, const std::vector<std::string>& overrides = {});
 Machine parse_machine(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides = {});
 
-// The machines shipped in machines/, compiled into drom: their names (file names without .toml).
+// The machines shipped in cases/machines/, compiled into drom: their names (file names without .toml).
 std::vector<std::string> shipped_machine_names();
 // A machine file's path, or the name of a shipped machine ("ucp710_like").
 Machine load_machine(const std::string& path_or_name, const std::vector<std::string>& overrides = {});

@@ -16,7 +16,7 @@ import re
 import sys
 
 SOURCE_SUFFIXES = (".cpp", ".hpp", ".h")
-SKIPPED_FOLDERS = {".git", "tests", "bench", "examples", "docs", "cases", "machines", "scripts", "cmake"}
+SKIPPED_FOLDERS = {".git", "tests", "bench", "examples", "docs", "cases", "scripts", "cmake"}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
 RULE_START = re.compile(r"^May depend on:", re.MULTILINE)
 MODULE_NAME = re.compile(r"`([A-Za-z0-9_]+(?:/[A-Za-z0-9_]+)*)/`")

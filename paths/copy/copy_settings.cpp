@@ -81,7 +81,7 @@ std::string default_copy_settings() {
     << "\nholder_diameter = " << 2 * s.roughing.tool.holder_reach() << "\nlongitudinal_step = " << s.roughing.longitudinal_step << "\ntransverse_step = " << s.roughing.transverse_step
     << "\ndepth = " << s.roughing.depth << "\nallowance = " << s.roughing.allowance << "               # mm left for finishing, at least\nvoxel = 0.0                   # 0: min(steps, depth) / 4\nramp_angle = "
     << s.roughing.ramp_angle << "\nfeed = " << s.roughing_feed << "\n\n"
-    << "[machine]\nname = \"" << s.machine << "\"      # a machines/ name or a file\nset = []                      # overrides, e.g. [\"axes.A.stroke=[-30, 120]\"]\nspindle_speed = "
+    << "[machine]\nname = \"" << s.machine << "\"      # a cases/machines/ name or a file\nset = []                      # overrides, e.g. [\"axes.A.stroke=[-30, 120]\"]\nspindle_speed = "
     << s.spindle_speed << "\n\n"
     << "[stock]\nbox = []                      # [x0, x1, y0, y1, z0, z1]; empty: the cloud's box grown by margin\nmargin = " << s.stock_margin
     << "\nbase_is_obstacle = true       # the stock under the cloud stays: never entered\n\n"

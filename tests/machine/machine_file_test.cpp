@@ -68,7 +68,7 @@ TEST(MachineFile, ShippedMachinesLoadWithTheirUnits) {
   const Machine g = load_machine("gantry_head_ac", {"setup.tool_length=80"});
   EXPECT_EQ(g.tool_length, 80);
   EXPECT_EQ(g.chain, KinematicChain::HeadHead);
-  EXPECT_EQ(load_machine(DROM_SOURCE_DIR "/machines/vmc_3axis.toml").chain, KinematicChain::ThreeAxis);
+  EXPECT_EQ(load_machine(DROM_SOURCE_DIR "/cases/machines/vmc_3axis.toml").chain, KinematicChain::ThreeAxis);
 }
 
 TEST(MachineFile, AValidFileParses) { EXPECT_EQ(message_of(kValid), ""); }
