@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 #include <type_traits>
 
@@ -103,7 +104,7 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
   t.cutter.corner_radius = cutter == "ball" ? t.cutter.radius : r.real("tool.corner_radius", Range::positive(), std::min(t.cutter.corner_radius, t.cutter.radius));
   t.flute_length = r.real("tool.flute_length", Range::open_closed(0, 1e4), t.flute_length);
   t.shank_radius = r.real("tool.shank_radius", Range::open_closed(0, 1e3), t.shank_radius);
-  t.gauge_length = r.real("tool.gauge_length", Range::open_closed(0, 1e4), t.gauge_length);
+  t.gauge_length = r.real("tool.stick_out", Range::open_closed(0, 1e4), t.gauge_length);
   if (r.has("tool.holder_z") || r.has("tool.holder_radius")) {
     t.holder.z = r.reals("tool.holder_z", Range::closed(0, 1e4));
     t.holder.radius = r.reals("tool.holder_radius", Range::open_closed(0, 1e3));
@@ -161,6 +162,17 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
   c.clearance.required = r.real("check.required", Range::closed(-1e3, 1e3), c.clearance.required);
   c.clearance.gouge_spacing = r.real("check.gouge_spacing", Range::positive(), c.clearance.gouge_spacing);
   c.machine = r.text("machine.definition", c.machine);
+  // The relaxation under the machine's limits: its keys are read (and checked) even when it is off.
+  constexpr double kRadian = std::numbers::pi / 180;
+  RelaxationSettings relax;
+  relax.tilt_min = r.real("relax.tilt_min", Range::closed(0, 85), relax.tilt_min / kRadian) * kRadian;
+  relax.tilt_max = r.real("relax.tilt_max", Range::open_closed(0, 85), relax.tilt_max / kRadian) * kRadian;
+  if (!(relax.tilt_max > relax.tilt_min)) r.fail("relax.tilt_max", "must exceed relax.tilt_min (degrees from the surface normal)");
+  relax.free_yaw = r.boolean("relax.free_yaw", relax.free_yaw);
+  relax.yaw_range = r.real("relax.yaw_range", Range::open_closed(0, 180), relax.yaw_range / kRadian) * kRadian;
+  relax.control_points = static_cast<int>(r.integer("relax.control_points", 4, 200, relax.control_points));
+  relax.max_evaluations = static_cast<int>(r.integer("relax.max_evaluations", 10, 100000, relax.max_evaluations));
+  if (r.boolean("relax.enabled", false)) c.relax = relax;
   if (r.has("machine.part_origin")) {
     const auto o = r.reals("machine.part_origin", Range::closed(-1e4, 1e4));
     if (o.size() != 3) r.fail("machine.part_origin", "expected [x, y, z] in mm: where the scene's origin sits in the machine's table frame");

@@ -6,6 +6,7 @@
 #include "paths/orient/clearance_check.hpp"
 #include "paths/orient/force_voxel_field.hpp"
 #include "paths/orient/orient_scene.hpp"
+#include "paths/orient/orientation_under_limits.hpp"
 
 #include <filesystem>
 #include <optional>
@@ -39,6 +40,9 @@ struct OrientCase {
   std::string machine = "ucp710_like";
   std::optional<Eigen::Vector3d> part_origin;  // machine.part_origin: the scene's own when unset
   bool model_on = true;            // false: the programmed axis only (what the clearance check flags)
+  // [relax]: also the programmed axis relaxed under the machine's limits (thesis 003, eq. 5), checked
+  // and reported beside the field's result; empty: not asked.
+  std::optional<RelaxationSettings> relax;
   std::string resolved;            // the case after overrides
 };
 

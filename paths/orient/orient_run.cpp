@@ -367,6 +367,86 @@ json clearance_report_json(const ClearanceReport& r) {
               {"gouges", r.gouges.size()}, {"collision_list", v}, {"gouge_list", g}};
 }
 
+// Stage 5b, with [relax]: the programmed axis relaxed under the machine's limits (thesis 003, eq. 5;
+// orientation_under_limits.hpp): the contact kept, the tilt (and yaw) fields the machine runs fastest
+// within the bounds, pass by pass; then checked for clearance like the field's result. A different
+// answer to the same question (which axis along these passes?), reported beside the field's: the
+// relaxation knows the machine and not the obstacles, the field the obstacles and not the machine.
+struct Relaxation {
+  json summary;
+  machine::ClProgram program;
+};
+
+Relaxation relax_programmed_axes(const OrientCase& c, const OrientScene& scene, const machine::Kinematics& kin, const ClearanceChecker& checker,
+                                 tbb::task_arena& arena, OrientResult& result) {
+  const Tool& tool = scene.tool.cutter;
+  const double feed = c.dynamics.recall.feed;
+  std::vector<PassOrientation> relaxed(scene.passes.size());
+  std::vector<std::string> errors(scene.passes.size());
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t(0), scene.passes.size(), [&](std::size_t p) {
+      const FramedPath& path = scene.passes[p];
+      SurfacePass pass;
+      pass.feed = feed;
+      std::vector<Orientation> programmed;
+      for (std::size_t i = 0; i < path.cl.size(); ++i) {
+        const FramedPath::Frame fr = path.at(path.s[i]);
+        // The path's CL is the corner circle's centre over the contact: CC + r n.
+        pass.points.push_back({path.cl[i] - tool.corner_radius * fr.n, fr.n, fr.f, 0.0});
+        const Eigen::Vector3d u = tool_rotation(fr, path.roll_prog[i], path.pitch_prog[i]).col(2);
+        programmed.push_back({std::acos(std::clamp(u.dot(fr.n), -1.0, 1.0)), std::atan2(u.dot(fr.n.cross(fr.f)), u.dot(fr.f))});
+      }
+      try {
+        relaxed[p] = relax_orientation(pass, tool, programmed, kin, *c.relax);
+      } catch (const InputError& e) {
+        errors[p] = e.what();
+      }
+    });
+  });
+  PassPoses q;
+  for (auto* v : {&q.cl, &q.after}) v->resize(scene.passes.size());
+  q.s.resize(scene.passes.size());
+  result.relaxed.resize(scene.passes.size());
+  double time_before = 0, time_after = 0;
+  int evaluations = 0;
+  json failed = json::array();
+  for (std::size_t p = 0; p < scene.passes.size(); ++p) {
+    if (!errors[p].empty()) {
+      failed.push_back({{"pass", p}, {"error", errors[p]}});
+      continue;
+    }
+    result.relaxed[p] = relaxed[p].poses;
+    time_before += relaxed[p].time_before, time_after += relaxed[p].time_after, evaluations += relaxed[p].evaluations;
+    for (std::size_t i = 0; i < relaxed[p].poses.size(); ++i) {
+      const machine::ClPose& pose = relaxed[p].poses[i];
+      q.cl[p].push_back(pose.tip + tool.pivot_height() * pose.axis);
+      q.after[p].push_back(pose.axis);
+      q.s[p].push_back(scene.passes[p].s[i]);
+    }
+  }
+  arena.execute([&] { result.relaxed_check = checker.check_all(q.cl, q.after, q.s); });
+  Relaxation r;
+  r.program = cl_program(result.relaxed, feed);
+  const machine::ClOnMachine on = machine::cl_to_machine_program(r.program, kin);
+  const RelaxationSettings& rs = *c.relax;
+  const double deg = kDeg;
+  r.summary = {{"model", "thesis 003 eq. 5: the programmed axis's tilt (and yaw) relaxed under the machine's limits, the contact kept"},
+               {"tilt_deg", {rs.tilt_min * deg, rs.tilt_max * deg}},
+               {"free_yaw", rs.free_yaw},
+               {"passes_relaxed", scene.passes.size() - failed.size()},
+               {"passes_failed", failed},
+               {"time_programmed_s", time_before},
+               {"time_relaxed_s", time_after},
+               {"evaluations", evaluations},
+               {"cycle_time_relaxed_s", on.joints.violations.empty() ? machine::predict_feed(on.program, kin).cycle_time : -1.0},
+               {"unreachable_poses", on.joints.violations.size()},
+               {"clearance", clearance_report_json(result.relaxed_check)},
+               {"verdict", !failed.empty() || !on.joints.violations.empty() ? "OUT OF THE MACHINE'S REACH"
+                           : !result.relaxed_check.collisions.empty()        ? "COLLISIONS"
+                                                                             : "collision-free"}};
+  return r;
+}
+
 json machine_json(const machine::Machine& m, const Eigen::Vector3d& origin, const OnMachine& on, const OrientResult& result) {
   json j;
   const char* names[3] = {"velocity", "acceleration", "jerk"};
@@ -570,6 +650,13 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
 
   result.summary = orient_summary(c, {scene, pre, integration, proof, on, m, origin, arena.max_concurrency()}, result);
   say(result_line(result, on));
+  std::optional<Relaxation> relaxation;
+  if (c.relax) {
+    relaxation = relax_programmed_axes(c, scene, kin, *pre.checker, arena, result);
+    result.summary["relaxed_programmed_axis"] = relaxation->summary;
+    say("  the programmed axis relaxed under the limits: " + relaxation->summary["verdict"].get<std::string>() + ", passes " +
+        std::to_string(relaxation->summary["time_programmed_s"].get<double>()) + " -> " + std::to_string(relaxation->summary["time_relaxed_s"].get<double>()) + " s");
+  }
   if (!options.write_files) return result;
   const std::filesystem::path& out = options.out;
   std::filesystem::create_directories(out);
@@ -577,6 +664,10 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   if (result.unreachable.empty()) write_file_atomically(out / "program.ngc", machine::post_process(on.program_after, kin, {"drom orient " + scene.name}));
   std::vector<std::string> files{"cl.csv", "path.vtp", "poses.vtp", "angles.csv", "axes.csv"};
   if (result.unreachable.empty()) files.insert(files.begin() + 1, "program.ngc");
+  if (relaxation) {
+    write_file_atomically(out / "relaxed_cl.csv", machine::cl_csv(relaxation->program));
+    files.push_back("relaxed_cl.csv");
+  }
   write_orient_tables(out, scene, m, result, on.axes_after);
   write_angle_plots(out, scene, result.passes, files);
   result.summary["files"] = files;

@@ -10,6 +10,7 @@
 //   poses.vtp               the tool's axis as a segment tip → holder top every few mm
 //   angles.csv, angles.png  θ, θ̇, θ̈, θ⃛ along s (per pass)
 //   axes.csv                the rotary axes along s at the feed: position, velocity, acceleration, jerk
+//   relaxed_cl.csv          with [relax]: the programmed axis relaxed under the machine's limits
 //   summary.json            the figures, the timing split (precompute, poses, clearance check)
 #include "paths/orient/orient_case.hpp"
 
@@ -35,6 +36,10 @@ struct OrientResult {
   // Poses of the corrected axis the machine cannot reach (a stroke, a rotary limit): reported, with the
   // rest of the result written, rather than thrown away after the whole computation. No G-code then.
   std::vector<std::string> unreachable;
+  // With [relax]: the programmed axis relaxed under the machine's limits, per pass (tip and axis at
+  // each of the pass's points; empty for a pass the relaxation could not place), and its check.
+  std::vector<std::vector<machine::ClPose>> relaxed;
+  ClearanceReport relaxed_check;
 };
 
 // Throws InputError for bad input: a check surface crossing the CL path, a tool longer than the

@@ -1,5 +1,6 @@
 // Issue 24's checks 4 (the voxel field against the direct sum), 5 (the clearance check proves the
 // result collision-free, and finds the collisions of the programmed axis) and 7 (bad input).
+#include "paths/cutter/tool_assembly.hpp"
 #include "paths/orient/force_voxel_field.hpp"
 #include "paths/orient/orient_run.hpp"
 #include "support/input_error.hpp"
@@ -8,6 +9,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -219,7 +221,7 @@ points = [[30.0, -20.0, -5.0], [30.0, -20.0, 30.0], [30.0, 20.0, -5.0], [30.0, 2
   }
   // A tool longer than the machine's Z stroke.
   try {
-    run_orient(small_case("corner", {"tool.gauge_length=300", "tool.holder_z=[0.0, 300.0]", "tool.holder_radius=[8.0, 8.0]"}), {"", true, false});
+    run_orient(small_case("corner", {"tool.stick_out=300", "tool.holder_z=[0.0, 300.0]", "tool.holder_radius=[8.0, 8.0]"}), {"", true, false});
     ADD_FAILURE() << "a 600 mm tool was accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("longer than the Z stroke"), std::string::npos) << e.what();
@@ -353,6 +355,44 @@ TEST(OrientMachine, SmoothingTheResultBoundsTheJerkAndShortensTheCycle) {
 }
 
 // The passes are placed for the case's tool: CL = S + R n moves with the ball's radius.
+// drom orient's [relax]: the programmed axis relaxed under the machine's limits (thesis 003 eq. 5),
+// checked here against the cutter model rather than the relaxation's own pose formula: at every point
+// the contact stays on the cutter's surface, the axis within the tilt bounds of the surface normal,
+// and the poses are proved (or not) by the same clearance check as the field's result.
+TEST(OrientRelax, TheRelaxedProgrammedAxisKeepsTheContactWithinTheTiltBounds) {
+  const OrientCase c = small_case("bump", {"relax.enabled=true", "relax.tilt_min=2", "relax.tilt_max=6"});
+  const OrientResult r = run_orient(c, {"", true, false});
+  const OrientScene scene = build_orient_scene(c);
+  ASSERT_EQ(r.relaxed.size(), scene.passes.size());
+  constexpr double degree = std::numbers::pi / 180;
+  std::size_t poses = 0;
+  for (std::size_t p = 0; p < scene.passes.size(); ++p) {
+    const FramedPath& path = scene.passes[p];
+    ASSERT_EQ(r.relaxed[p].size(), path.cl.size());
+    for (std::size_t i = 0; i < path.cl.size(); ++i, ++poses) {
+      const FramedPath::Frame fr = path.at(path.s[i]);
+      const Eigen::Vector3d contact = path.cl[i] - scene.tool.cutter.corner_radius * fr.n;
+      const machine::ClPose& pose = r.relaxed[p][i];
+      EXPECT_NEAR(signed_distance(scene.tool, {pose.tip, pose.axis}, contact), 0, 1e-6) << "pass " << p << " point " << i;
+      const double tilt = std::acos(std::clamp(pose.axis.dot(fr.n), -1.0, 1.0));
+      EXPECT_GE(tilt, 2 * degree - 1e-9);
+      EXPECT_LE(tilt, 6 * degree + 1e-9);
+    }
+  }
+  EXPECT_EQ(r.relaxed_check.poses, poses);
+  const auto& s = r.summary["relaxed_programmed_axis"];
+  EXPECT_GT(s["time_relaxed_s"].get<double>(), 0);
+  EXPECT_EQ(s["passes_relaxed"].get<std::size_t>(), scene.passes.size());
+  EXPECT_EQ(s["clearance"]["collisions"].get<std::size_t>(), r.relaxed_check.collisions.size());
+  // Its keys are checked like every other.
+  try {
+    small_case("bump", {"relax.enabled=true", "relax.tilt_min=5", "relax.tilt_max=3"});
+    ADD_FAILURE() << "tilt_max below tilt_min was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("relax.tilt_max"), std::string::npos) << e.what();
+  }
+}
+
 TEST(OrientScenes, PassesFollowTheCasesTool) {
   const OrientScene r5 = build_orient_scene(small_case("panel"));
   const OrientScene r3 = build_orient_scene(small_case("panel", {"tool.radius=3"}));
