@@ -14,6 +14,8 @@
 #include "support/input_error.hpp"
 #include "support/version.hpp"
 
+#include "repr.hpp"
+
 #include <pybind11/eigen.h>
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
@@ -29,6 +31,7 @@
 
 namespace py = pybind11;
 using namespace drom;
+using drom::python::fields;
 
 namespace {
 
@@ -112,7 +115,7 @@ PYBIND11_MODULE(drom, m) {
       .def_readonly("shape_tolerance", &cases::Case::shape_tolerance)
       .def_readonly("shape_pass", &cases::Case::shape_pass)
       .def_readonly("run_scale", &cases::Case::run_scale)
-      .def("__repr__", [](const cases::Case& c) { return "<drom.Case '" + c.name + "' from " + c.origin + ">"; });
+      .def("__repr__", fields<cases::Case>({"name", "origin", "shape", "element", "solver", "nx", "ny", "nz", "run_scale"}));
   m.def("load_case", &cases::load_case, py::arg("path") = std::nullopt, py::arg("overrides") = std::vector<std::string>{},
         "A case file (or, without one, the embedded flat plate) with 'key=value' overrides as --set gives them; raises InputError");
   m.def("case_from_text", &cases::case_from_text, py::arg("text"), py::arg("origin") = "<text>", py::arg("overrides") = std::vector<std::string>{});
@@ -142,8 +145,9 @@ PYBIND11_MODULE(drom, m) {
 
   // ---- the light model and the reduction ----------------------------------------------------
   py::class_<reduce::LightModel, std::shared_ptr<reduce::LightModel>>(m, "LightModel", "The light model file (reduce/light_model.hpp)")
-      .def_static("read", [](const std::filesystem::path& p) { return std::make_shared<reduce::LightModel>(reduce::LightModel::read(p)); })
-      .def("write", &reduce::LightModel::write)
+      .def_static("read", [](const std::filesystem::path& p) { return std::make_shared<reduce::LightModel>(reduce::LightModel::read(p)); }, py::arg("path"),
+                  "reads a model file; raises InputError naming the file and dataset")
+      .def("write", &reduce::LightModel::write, py::arg("path"), "writes the model file (atomically)")
       .def_property_readonly("rank", &reduce::LightModel::rank)
       .def_property_readonly("error_bound", &reduce::LightModel::error_bound, "mm: the bound on the model's max error for any database column")
       .def_readonly("tolerance", &reduce::LightModel::tolerance)
@@ -156,7 +160,8 @@ PYBIND11_MODULE(drom, m) {
       .def_readonly("tool_radius", &reduce::LightModel::tool_radius)
       .def_readonly("case_toml", &reduce::LightModel::case_toml)
       .def_property_readonly("target_nodes", [](const reduce::LightModel& lm) { return Eigen::Matrix3Xd(lm.target.nodes()); })
-      .def_property_readonly("has_top", &reduce::LightModel::has_top);
+      .def_property_readonly("has_top", &reduce::LightModel::has_top)
+      .def("__repr__", fields<reduce::LightModel>({"rank", "error_bound", "tolerance", "tool_radius", "has_top", "path", "shape_nodes"}));
   m.def(
       "reduce_database",
       [](const std::filesystem::path& database, double tolerance, double history_tolerance, double profile_scale, int max_rank, const std::string& prior_mean,
@@ -176,7 +181,7 @@ PYBIND11_MODULE(drom, m) {
       "An offline database reduced to the light model (drom reduce); with out=MODEL.h5, the model and its pictures and summary are written too");
 
   // ---- the predictor ------------------------------------------------------------------------
-  py::class_<online::PredictorSettings>(m, "PredictorSettings")
+  py::class_<online::PredictorSettings>(m, "PredictorSettings", "The predictor's settings (online/predictor.hpp); drom.predictor_settings(case, model) gives drom run's")
       .def(py::init<>())
       .def_readwrite("noise_sd", &online::PredictorSettings::noise_sd)
       .def_readwrite("prior_scale", &online::PredictorSettings::prior_scale)
@@ -189,10 +194,24 @@ PYBIND11_MODULE(drom, m) {
       .def_readwrite("top_noise_sd", &online::PredictorSettings::top_noise_sd)
       .def_readwrite("max_offset", &online::PredictorSettings::max_offset)
       .def_readwrite("glitch_sigmas", &online::PredictorSettings::glitch_sigmas)
-      .def_readwrite("glitch_run", &online::PredictorSettings::glitch_run);
+      .def_readwrite("glitch_run", &online::PredictorSettings::glitch_run)
+      .def("__repr__", fields<online::PredictorSettings>({"noise_sd", "prior_scale", "reading_range", "learning_tolerance", "learning_window",
+                                                          "max_offset_rate", "path_sample", "use_stock_top", "top_noise_sd", "max_offset",
+                                                          "glitch_sigmas", "glitch_run"}));
+  py::class_<online::ProfileReport>(m, "ProfileReport", "What add_profile did with a profile: points used and dropped, by reason")
+      .def_readonly("used", &online::ProfileReport::used)
+      .def_readonly("used_top", &online::ProfileReport::used_top)
+      .def_readonly("outside", &online::ProfileReport::outside)
+      .def_readonly("not_yet_cut", &online::ProfileReport::not_yet_cut)
+      .def_readonly("invalid", &online::ProfileReport::invalid)
+      .def_readonly("out_of_range", &online::ProfileReport::out_of_range)
+      .def_readonly("predictive_rms", &online::ProfileReport::predictive_rms)
+      .def_property_readonly("rejected", [](const online::ProfileReport& r) { return r.rejected ? py::object(py::str(r.rejected)) : py::object(py::none()); })
+      .def("as_dict", &report_dict)
+      .def("__repr__", fields<online::ProfileReport>({"rejected", "used", "used_top", "outside", "not_yet_cut", "invalid", "out_of_range", "predictive_rms"}));
   py::class_<online::Predictor>(m, "Predictor", "The online predictor (online/predictor.hpp): one thread feeds profiles, one asks for offsets")
       .def(py::init([](const std::shared_ptr<reduce::LightModel>& model, const online::PredictorSettings& s) { return std::make_unique<online::Predictor>(*model, s); }),
-           py::arg("model"), py::arg("settings") = online::PredictorSettings{})
+           py::arg("model"), py::arg_v("settings", online::PredictorSettings{}, "PredictorSettings()"))
       .def(
           "add_profile",
           [](online::Predictor& p, double t, const std::array<double, 3>& tip, double applied_offset, const PointArray& points) {
@@ -241,23 +260,15 @@ PYBIND11_MODULE(drom, m) {
           [](const online::Predictor& p, double tolerance, double straightening_limit, double confidence) {
             return std::string(online::verdict_name(p.verdict({tolerance, straightening_limit, confidence})));
           },
-          py::arg("tolerance") = 0.1, py::arg("straightening_limit") = 1.0, py::arg("confidence") = 1.96);
-  py::class_<online::ProfileReport>(m, "ProfileReport")
-      .def_readonly("used", &online::ProfileReport::used)
-      .def_readonly("used_top", &online::ProfileReport::used_top)
-      .def_readonly("outside", &online::ProfileReport::outside)
-      .def_readonly("not_yet_cut", &online::ProfileReport::not_yet_cut)
-      .def_readonly("invalid", &online::ProfileReport::invalid)
-      .def_readonly("out_of_range", &online::ProfileReport::out_of_range)
-      .def_readonly("predictive_rms", &online::ProfileReport::predictive_rms)
-      .def_property_readonly("rejected", [](const online::ProfileReport& r) { return r.rejected ? py::object(py::str(r.rejected)) : py::object(py::none()); })
-      .def("as_dict", &report_dict);
+          py::arg("tolerance") = 0.1, py::arg("straightening_limit") = 1.0, py::arg("confidence") = 1.96)
+      .def("__repr__", fields<online::Predictor>({"learned", "max_offset"}));
 
   // ---- the closed loop ----------------------------------------------------------------------
   py::class_<loop::ClosedLoopInputs, std::shared_ptr<loop::ClosedLoopInputs>>(m, "ClosedLoopInputs",
                                                                               "drom run's model and truth (loop/closed_loop_setup.hpp)")
       .def_property_readonly("model", [](const loop::ClosedLoopInputs& in) { return std::make_shared<reduce::LightModel>(in.model); })
-      .def_property_readonly("truth_final_displacement", [](const loop::ClosedLoopInputs& in) { return in.truth.final_displacement; });
+      .def_property_readonly("truth_final_displacement", [](const loop::ClosedLoopInputs& in) { return in.truth.final_displacement; })
+      .def("__repr__", fields<loop::ClosedLoopInputs>({"model", "truth_final_displacement"}));
   m.def(
       "prepare_closed_loop",
       [](const cases::Case& c, const std::filesystem::path& out, bool quiet, int threads) {
@@ -293,7 +304,7 @@ PYBIND11_MODULE(drom, m) {
       "drom study: one loop parameter swept (noise, angle, refresh, calibration, desync, amplitude, seed); returns its summary");
   m.def("study_parameters", &loop::study_parameters);
 
-  py::class_<online::LoopMachine::Step>(m, "LoopStep")
+  py::class_<online::LoopMachine::Step>(m, "LoopStep", "One step of LoopMachine.advance: its times, the tool tip, and whether a refresh or a scan is due")
       .def_readonly("index", &online::LoopMachine::Step::index)
       .def_readonly("clock", &online::LoopMachine::Step::clock)
       .def_readonly("true_time", &online::LoopMachine::Step::true_time)
@@ -306,7 +317,9 @@ PYBIND11_MODULE(drom, m) {
       .def_property_readonly("distortion", [](const online::LoopMachine::Step& s) { return s.sample.distortion; })
       .def_readonly("refresh", &online::LoopMachine::Step::refresh)
       .def_readonly("setpoint_time", &online::LoopMachine::Step::setpoint_time)
-      .def_readonly("scan", &online::LoopMachine::Step::scan);
+      .def_readonly("scan", &online::LoopMachine::Step::scan)
+      .def("__repr__", fields<online::LoopMachine::Step>({"index", "clock", "true_time", "believed_time", "tip", "pass_", "on_target", "refresh",
+                                                          "setpoint_time", "scan"}));
   py::class_<Machine>(m, "LoopMachine",
                       "drom run's simulated machine, part and laser sheet (online/closed_loop.hpp), for a controller of one's own: step it, command "
                       "offsets when a refresh is due, read a profile when a scan is due")
@@ -321,6 +334,7 @@ PYBIND11_MODULE(drom, m) {
       .def("advance", [](Machine& mc, long k) { return mc.machine->advance(k); }, py::arg("k"))
       .def("command", [](Machine& mc, double offset) { mc.machine->command(offset); }, py::arg("offset"))
       .def_property_readonly("applied", [](const Machine& mc) { return mc.machine->applied(); })
+      .def("__repr__", fields<Machine>({"steps", "applied"}))
       .def("scan", [](Machine& mc) {
         const auto points = mc.machine->scan();
         py::array_t<double> a({static_cast<py::ssize_t>(points.size()), py::ssize_t{3}});
@@ -344,5 +358,6 @@ PYBIND11_MODULE(drom, m) {
         for (std::size_t i = 0; i < spans.size(); ++i) p.add_profile(times[i], {Eigen::Vector3d(tips[i][0], tips[i][1], tips[i][2]), offsets[i]}, spans[i]);
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       },
+      py::arg("predictor"), py::arg("times"), py::arg("tips"), py::arg("offsets"), py::arg("profiles"),
       "Feeds the profiles from a C++ loop and returns the seconds it took (the reference of the Python-overhead benchmark)");
 }

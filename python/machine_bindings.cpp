@@ -6,6 +6,8 @@
 #include "machine/program_check.hpp"
 #include "support/input_error.hpp"
 
+#include "repr.hpp"
+
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -53,7 +55,8 @@ void bind_machine(py::module_& top) {
       .def_property_readonly("kinematics", [](const machine::Machine& x) { return std::string(machine::chain_name(x.chain)); })
       .def_property_readonly("rotary_axes", &machine::Machine::rotary_letters)
       .def_readonly("interpolation_cycle", &machine::Machine::interpolation_cycle)
-      .def_readonly("tool_length", &machine::Machine::tool_length);
+      .def_readonly("tool_length", &machine::Machine::tool_length)
+      .def("__repr__", python::fields<machine::Machine>({"name", "kinematics", "rotary_axes", "tool_length", "interpolation_cycle", "origin"}));
   m.def("load", &machine::load_machine, py::arg("path_or_name"), py::arg("overrides") = std::vector<std::string>{},
         "a machine file, or a shipped machine's name, with 'key=value' overrides; raises InputError");
 

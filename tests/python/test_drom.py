@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import drom
+from test_api import assert_readable_repr
 
 BINARY = os.environ["DROM_BINARY"]
 SCRATCH = pathlib.Path(os.environ["DROM_TEST_DIR"])
@@ -101,6 +102,9 @@ def test_a_predictor_fed_from_numpy_reproduces_drom_runs_corrected_path_error(co
     model = inputs.model
     predictor = drom.Predictor(model, drom.predictor_settings(case, model))
     machine = drom.LoopMachine(inputs, case)
+    assert_readable_repr(inputs)
+    assert_readable_repr(machine, steps=machine.steps, applied=0.0)
+    assert_readable_repr(predictor, learned=False)
     worst = 0.0
     for k in range(machine.steps + 1):
         step = machine.advance(k)
@@ -113,7 +117,9 @@ def test_a_predictor_fed_from_numpy_reproduces_drom_runs_corrected_path_error(co
         if step.scan:
             points = machine.scan()
             assert points.shape[1] == 3 and points.dtype == np.float64
-            predictor.add_profile(step.believed_time, step.believed_tip, machine.applied, points)
+            report = predictor.add_profile(step.believed_time, step.believed_tip, machine.applied, points)
+    assert_readable_repr(step, index=step.index, pass_=step.pass_, refresh=step.refresh, scan=step.scan)
+    assert_readable_repr(report, used=report.used, rejected=report.rejected)
     expected = summary["headline"]["path_error_corrected_max_from_pass3_mm"]
     assert worst == pytest.approx(expected, rel=1e-9, abs=1e-15)
     assert predictor.learned
@@ -128,6 +134,9 @@ def test_points_must_be_n_by_3(coarse_job):
         predictor.add_profile(1.0, [0.0, 0.0, 0.0], 0.0, np.zeros((10, 2)))
     report = predictor.add_profile(1.0, [0.0, 0.0, 0.0], 0.0, np.full((5, 3), np.nan))
     assert report.invalid + report.outside == 5
+    assert_readable_repr(report, used=0, invalid=report.invalid, outside=report.outside)
+    text = assert_readable_repr(model, rank=model.rank, error_bound=model.error_bound, has_top=model.has_top)
+    assert f"path=<array of shape {model.path.shape!r}>" in text
 
 
 def test_a_model_of_another_format_version_or_truncated_is_refused(coarse_job):
