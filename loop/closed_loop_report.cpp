@@ -97,100 +97,120 @@ std::string corrected_gcode(const reduce::LightModel& model, const std::vector<o
   return g;
 }
 
+namespace {
+
+// Per pass: path error with and without correction, and the final-shape prediction at its end.
+void write_pass_table(const std::filesystem::path& out, const cases::Case& c, const online::ClosedLoopResult& corrected,
+                      const online::ClosedLoopResult& uncorrected, std::vector<std::string>& files) {
+  char line[512];
+  std::string csv =
+      "pass,start_s,end_s,uncorrected_mean_mm,uncorrected_max_mm,corrected_mean_mm,corrected_max_mm,learned_by_end,"
+      "final_shape_max_error_mm,final_shape_rms_error_mm,band95_coverage,uncorrected_final_shape_max_error_mm\n";
+  PlotSeries um{"without correction, max", {}, {}, "o-"}, cm{"with correction, max", {}, {}, "s-"}, cmean{"with correction, mean", {}, {}, "s--"};
+  for (std::size_t p = 0; p < corrected.passes.size(); ++p) {
+    const auto &a = corrected.passes[p], &b = uncorrected.passes[p];
+    std::snprintf(line, sizeof line, "%d,%.3f,%.3f,%.6e,%.6e,%.6e,%.6e,%d,%.6e,%.6e,%.4f,%.6e\n", a.pass, a.start, a.end, b.mean_abs_error, b.max_abs_error,
+                  a.mean_abs_error, a.max_abs_error, a.learned ? 1 : 0, a.shape_max_error, a.shape_rms_error, a.shape_band_coverage, b.shape_max_error);
+    csv += line;
+    if (b.samples > 0) um.x.push_back(a.pass), um.y.push_back(b.max_abs_error);
+    if (a.samples > 0) cm.x.push_back(a.pass), cm.y.push_back(std::max(a.max_abs_error, 1e-7)), cmean.x.push_back(a.pass), cmean.y.push_back(std::max(a.mean_abs_error, 1e-7));
+  }
+  write_file_atomically(out / "passes.csv", csv);
+  files.push_back("passes.csv");
+  PlotSpec plot;
+  plot.title = c.name + ": altitude error of the tool-workpiece contact point per pass (noise " + std::to_string(c.sensor_noise).substr(0, 5) + " mm)";
+  plot.x_label = "pass";
+  plot.y_label = "|error| (mm)";
+  plot.series = {um, cm, cmean};
+  plot.hlines = {{"path tolerance", c.path_tolerance}};
+  plot.log_y = true;
+  if (write_png_plot(out / "passes.png", plot)) files.push_back("passes.png");
+}
+
+void write_shape_error_plot(const std::filesystem::path& out, const cases::Case& c, const online::ClosedLoopResult& corrected,
+                            std::vector<std::string>& files) {
+  PlotSeries se{"final-shape max error (with correction)", {}, {}, "o-"}, sr{"RMS error", {}, {}, "s--"};
+  for (const auto& a : corrected.passes) se.x.push_back(a.pass), se.y.push_back(std::max(a.shape_max_error, 1e-7)), sr.x.push_back(a.pass), sr.y.push_back(std::max(a.shape_rms_error, 1e-7));
+  PlotSpec shape;
+  shape.title = c.name + ": predicted final shape against the truth's, at the end of each pass";
+  shape.x_label = "pass";
+  shape.y_label = "vertical displacement error (mm)";
+  shape.series = {se, sr};
+  shape.hlines = {{"shape tolerance", c.shape_tolerance}};
+  shape.log_y = true;
+  if (write_png_plot(out / "final_shape_error.png", shape)) files.push_back("final_shape_error.png");
+}
+
+// Every step on the floor, both runs (the seed's figs. 3.44 and 3.61 plot this along the path).
+void write_path_samples(const std::filesystem::path& out, const online::ClosedLoopResult& corrected, const online::ClosedLoopResult& uncorrected,
+                        std::vector<std::string>& files) {
+  char line[512];
+  std::string csv = "run,clock_s,program_time_s,pass,x_mm,y_mm,offset_mm,offset_sd_mm,distortion_mm,error_mm,learned\n";
+  for (const auto* r : {&uncorrected, &corrected})
+    for (const auto& s : r->samples) {
+      std::snprintf(line, sizeof line, "%s,%.3f,%.3f,%d,%.3f,%.3f,%.6e,%.3e,%.6e,%.6e,%d\n", r == &corrected ? "corrected" : "uncorrected", s.clock, s.program_time, s.pass,
+                    s.x, s.y, s.offset, s.offset_sd, s.distortion, s.error, s.learned ? 1 : 0);
+      csv += line;
+    }
+  write_file_atomically(out / "path_samples.csv", csv);
+  files.push_back("path_samples.csv");
+}
+
+void write_offset_stream(const std::filesystem::path& out, const online::ClosedLoopResult& corrected, std::vector<std::string>& files) {
+  char line[512];
+  std::string csv = "clock_s,believed_program_time_s,true_program_time_s,offset_mm\n";
+  for (const auto& o : corrected.offsets) {
+    std::snprintf(line, sizeof line, "%.3f,%.4f,%.4f,%.6e\n", o.clock, o.believed_time, o.true_time, o.offset);
+    csv += line;
+  }
+  write_file_atomically(out / "offsets.csv", csv);
+  files.push_back("offsets.csv");
+}
+
+// Final-shape predictions (with their band) against the truth, at the chosen passes and the last.
+void write_final_shape_frames(const std::filesystem::path& out, const cases::Case& c, const online::TruePart& truth,
+                              const online::ClosedLoopResult& corrected, std::vector<std::string>& files) {
+  std::vector<int> chosen = c.shape_vtk_passes;
+  chosen.push_back(static_cast<int>(corrected.passes.size()));
+  std::sort(chosen.begin(), chosen.end());
+  chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
+  fem::PvdCollection pvd;
+  for (int pass : chosen) {
+    if (pass < 1 || pass > static_cast<int>(corrected.shapes.size())) continue;
+    const auto& s = corrected.shapes[static_cast<std::size_t>(pass - 1)];
+    fem::VtuFields f;
+    const Eigen::Index n = s.nodes.cols();
+    f.point_vectors.emplace_back("predicted_mm", Eigen::Map<const Eigen::VectorXd>(s.displacement.data(), 3 * n));
+    f.point_vectors.emplace_back("true_mm", Eigen::Map<const Eigen::VectorXd>(truth.final_displacement.data(), 3 * n));
+    std::vector<double> err(static_cast<std::size_t>(n)), sd(err.size()), inside(err.size());
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      err[k] = s.displacement(2, i) - truth.final_displacement(2, i);
+      sd[k] = s.sd(2, i);
+      inside[k] = std::abs(err[k]) <= 1.96 * sd[k] ? 1 : 0;
+    }
+    f.point_scalars.emplace_back("vertical_error_mm", err);
+    f.point_scalars.emplace_back("vertical_sd_mm", sd);
+    f.point_scalars.emplace_back("inside_band95", inside);
+    const std::string name = "final_shape_pass_" + std::to_string(pass) + ".vtu";
+    fem::write_surface_vtu(out / name, s.nodes, s.faces, s.face_nodes, f);
+    pvd.add(static_cast<double>(pass), name);
+    files.push_back(name);
+  }
+  pvd.write(out / "final_shape.pvd");
+  files.push_back("final_shape.pvd");
+}
+
+}  // namespace
+
 std::vector<std::string> write_loop_outputs(const std::filesystem::path& out, const cases::Case& c, const reduce::LightModel& model, const online::TruePart& truth,
                                             const online::ClosedLoopResult& corrected, const online::ClosedLoopResult& uncorrected) {
   std::vector<std::string> files;
-  char line[512];
-  // Per pass: path error with and without correction, and the final-shape prediction at its end.
-  {
-    std::string csv =
-        "pass,start_s,end_s,uncorrected_mean_mm,uncorrected_max_mm,corrected_mean_mm,corrected_max_mm,learned_by_end,"
-        "final_shape_max_error_mm,final_shape_rms_error_mm,band95_coverage,uncorrected_final_shape_max_error_mm\n";
-    PlotSeries um{"without correction, max", {}, {}, "o-"}, cm{"with correction, max", {}, {}, "s-"}, cmean{"with correction, mean", {}, {}, "s--"};
-    for (std::size_t p = 0; p < corrected.passes.size(); ++p) {
-      const auto &a = corrected.passes[p], &b = uncorrected.passes[p];
-      std::snprintf(line, sizeof line, "%d,%.3f,%.3f,%.6e,%.6e,%.6e,%.6e,%d,%.6e,%.6e,%.4f,%.6e\n", a.pass, a.start, a.end, b.mean_abs_error, b.max_abs_error,
-                    a.mean_abs_error, a.max_abs_error, a.learned ? 1 : 0, a.shape_max_error, a.shape_rms_error, a.shape_band_coverage, b.shape_max_error);
-      csv += line;
-      if (b.samples > 0) um.x.push_back(a.pass), um.y.push_back(b.max_abs_error);
-      if (a.samples > 0) cm.x.push_back(a.pass), cm.y.push_back(std::max(a.max_abs_error, 1e-7)), cmean.x.push_back(a.pass), cmean.y.push_back(std::max(a.mean_abs_error, 1e-7));
-    }
-    write_file_atomically(out / "passes.csv", csv);
-    files.push_back("passes.csv");
-    PlotSpec plot;
-    plot.title = c.name + ": altitude error of the tool-workpiece contact point per pass (noise " + std::to_string(c.sensor_noise).substr(0, 5) + " mm)";
-    plot.x_label = "pass";
-    plot.y_label = "|error| (mm)";
-    plot.series = {um, cm, cmean};
-    plot.hlines = {{"path tolerance", c.path_tolerance}};
-    plot.log_y = true;
-    if (write_png_plot(out / "passes.png", plot)) files.push_back("passes.png");
-
-    PlotSeries se{"final-shape max error (with correction)", {}, {}, "o-"}, sr{"RMS error", {}, {}, "s--"};
-    for (const auto& a : corrected.passes) se.x.push_back(a.pass), se.y.push_back(std::max(a.shape_max_error, 1e-7)), sr.x.push_back(a.pass), sr.y.push_back(std::max(a.shape_rms_error, 1e-7));
-    PlotSpec shape;
-    shape.title = c.name + ": predicted final shape against the truth's, at the end of each pass";
-    shape.x_label = "pass";
-    shape.y_label = "vertical displacement error (mm)";
-    shape.series = {se, sr};
-    shape.hlines = {{"shape tolerance", c.shape_tolerance}};
-    shape.log_y = true;
-    if (write_png_plot(out / "final_shape_error.png", shape)) files.push_back("final_shape_error.png");
-  }
-  // Every step on the floor, both runs (the seed's figs. 3.44 and 3.61 plot this along the path).
-  {
-    std::string csv = "run,clock_s,program_time_s,pass,x_mm,y_mm,offset_mm,offset_sd_mm,distortion_mm,error_mm,learned\n";
-    for (const auto* r : {&uncorrected, &corrected})
-      for (const auto& s : r->samples) {
-        std::snprintf(line, sizeof line, "%s,%.3f,%.3f,%d,%.3f,%.3f,%.6e,%.3e,%.6e,%.6e,%d\n", r == &corrected ? "corrected" : "uncorrected", s.clock, s.program_time, s.pass,
-                      s.x, s.y, s.offset, s.offset_sd, s.distortion, s.error, s.learned ? 1 : 0);
-        csv += line;
-      }
-    write_file_atomically(out / "path_samples.csv", csv);
-    files.push_back("path_samples.csv");
-  }
-  // The offset stream.
-  {
-    std::string csv = "clock_s,believed_program_time_s,true_program_time_s,offset_mm\n";
-    for (const auto& o : corrected.offsets) {
-      std::snprintf(line, sizeof line, "%.3f,%.4f,%.4f,%.6e\n", o.clock, o.believed_time, o.true_time, o.offset);
-      csv += line;
-    }
-    write_file_atomically(out / "offsets.csv", csv);
-    files.push_back("offsets.csv");
-  }
-  // Final-shape predictions (with their band) against the truth, at the chosen passes and the last.
-  {
-    std::vector<int> chosen = c.shape_vtk_passes;
-    chosen.push_back(static_cast<int>(corrected.passes.size()));
-    std::sort(chosen.begin(), chosen.end());
-    chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
-    fem::PvdCollection pvd;
-    for (int pass : chosen) {
-      if (pass < 1 || pass > static_cast<int>(corrected.shapes.size())) continue;
-      const auto& s = corrected.shapes[static_cast<std::size_t>(pass - 1)];
-      fem::VtuFields f;
-      const Eigen::Index n = s.nodes.cols();
-      f.point_vectors.emplace_back("predicted_mm", Eigen::Map<const Eigen::VectorXd>(s.displacement.data(), 3 * n));
-      f.point_vectors.emplace_back("true_mm", Eigen::Map<const Eigen::VectorXd>(truth.final_displacement.data(), 3 * n));
-      std::vector<double> err(static_cast<std::size_t>(n)), sd(err.size()), inside(err.size());
-      for (Eigen::Index i = 0; i < n; ++i) {
-        const auto k = static_cast<std::size_t>(i);
-        err[k] = s.displacement(2, i) - truth.final_displacement(2, i);
-        sd[k] = s.sd(2, i);
-        inside[k] = std::abs(err[k]) <= 1.96 * sd[k] ? 1 : 0;
-      }
-      f.point_scalars.emplace_back("vertical_error_mm", err);
-      f.point_scalars.emplace_back("vertical_sd_mm", sd);
-      f.point_scalars.emplace_back("inside_band95", inside);
-      const std::string name = "final_shape_pass_" + std::to_string(pass) + ".vtu";
-      fem::write_surface_vtu(out / name, s.nodes, s.faces, s.face_nodes, f);
-      pvd.add(static_cast<double>(pass), name);
-      files.push_back(name);
-    }
-    pvd.write(out / "final_shape.pvd");
-    files.push_back("final_shape.pvd");
-  }
+  write_pass_table(out, c, corrected, uncorrected, files);
+  write_shape_error_plot(out, c, corrected, files);
+  write_path_samples(out, corrected, uncorrected, files);
+  write_offset_stream(out, corrected, files);
+  write_final_shape_frames(out, c, truth, corrected, files);
   write_file_atomically(out / "corrected_program.nc", corrected_gcode(model, online::floor_passes(model), corrected.offsets, c.name));
   files.push_back("corrected_program.nc");
   return files;

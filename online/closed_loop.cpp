@@ -203,88 +203,108 @@ CalibrationBias LoopMachine::calibration() const {
   return c;
 }
 
-ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void(double)>& progress) const {
-  const auto start = std::chrono::steady_clock::now();
-  LoopMachine machine(model_, truth, settings_);
-  Predictor predictor(model_, predictor_settings_);
+namespace {
+
+// One figure record per pass, before any step.
+ClosedLoopResult result_per_pass(const std::vector<Pass>& passes) {
   ClosedLoopResult result;
-  result.passes.resize(passes_.size());
-  for (std::size_t p = 0; p < passes_.size(); ++p) {
+  result.passes.resize(passes.size());
+  for (std::size_t p = 0; p < passes.size(); ++p) {
     result.passes[p].pass = static_cast<int>(p) + 1;
-    result.passes[p].start = passes_[p].start;
-    result.passes[p].end = passes_[p].end;
+    result.passes[p].start = passes[p].start;
+    result.passes[p].end = passes[p].end;
   }
-  std::size_t next_shape = 0;
-  const long steps = machine.steps();
-  for (long k = 0; k <= steps; ++k) {
-    const LoopMachine::Step step = machine.advance(k);
+  return result;
+}
 
-    // 1. The cut, and its error against the target where it truly is; where the synchronizer thinks it is.
-    if (step.pass > 0) {
-      result.sync.add(step.believed_time - step.true_time, (step.believed_tip - step.tip).norm());
-      result.sync_programmed_feed.add(step.programmed_feed_time - step.true_time,
-                                      (path_position(model_.path, step.programmed_feed_time) - step.tip).norm());
-    }
-    if (step.on_target) {
-      LoopSample s = step.sample;
-      s.offset_sd = predictor.predicted_offset_sd(step.true_time);
-      s.learned = result.learned_at >= 0;
-      result.samples.push_back(s);
-      auto& f = result.passes[static_cast<std::size_t>(step.pass - 1)];
-      ++f.samples;
-      f.mean_abs_error += std::abs(s.error);
-      f.max_abs_error = std::max(f.max_abs_error, std::abs(s.error));
-      f.max_abs_distortion = std::max(f.max_abs_distortion, std::abs(s.distortion));
-    }
-
-    // 2. A new setpoint, for the middle of the interval it will hold.
-    if (step.refresh) {
-      const double applied = settings_.correct ? predictor.tool_offset(step.setpoint_time) : 0.0;
-      machine.command(applied);
-      predictor.record_offset(step.believed_time, applied);
-      result.offsets.push_back({step.clock, step.believed_time, step.true_time, applied});
-    }
-
-    // 3. A profile.
-    if (step.scan) {
-      const auto points = machine.scan();
-      ToolPose pose;
-      pose.tip = step.believed_tip;
-      pose.applied_offset = machine.applied();
-      const ProfileReport report = predictor.add_profile(step.believed_time, pose, points);
-      ++result.profiles;
-      result.points.used += report.used, result.points.used_top += report.used_top, result.points.outside += report.outside, result.points.not_yet_cut += report.not_yet_cut;
-      result.points.invalid += report.invalid, result.points.out_of_range += report.out_of_range;
-      if (step.pass > 0) {
-        auto& f = result.passes[static_cast<std::size_t>(step.pass - 1)];
-        ++f.profiles;
-        f.points_used += report.used;
-      }
-      if (result.learned_at < 0 && predictor.learned()) result.learned_at = step.true_time;
-    }
-
-    // 4. At each pass's end: the final shape predicted now, against the truth's.
-    while (next_shape < passes_.size() && (step.true_time >= passes_[next_shape].end || k == steps)) {
-      FinalShape shape = predictor.final_shape();
-      result.estimates.push_back(predictor.estimate());
-      auto& f = result.passes[next_shape];
-      const Eigen::ArrayXd e = (shape.displacement.row(2) - truth.final_displacement.row(2)).transpose().array().abs();
-      f.shape_max_error = e.maxCoeff();
-      f.shape_rms_error = std::sqrt(e.square().mean());
-      f.shape_band_coverage = (e <= 1.96 * shape.sd.row(2).transpose().array()).cast<double>().mean();
-      f.learned = result.learned_at >= 0;
-      if (f.samples > 0) f.mean_abs_error /= f.samples;
-      result.shapes.push_back(std::move(shape));
-      ++next_shape;
-    }
-    if (progress && k % std::max(1L, steps / 100) == 0) progress(static_cast<double>(k) / static_cast<double>(steps));
+// 1. The cut, and its error against the target where it truly is; where the synchronizer thinks it is.
+void record_cut(const LoopMachine::Step& step, const Eigen::MatrixXd& path, const Predictor& predictor, ClosedLoopResult& result) {
+  if (step.pass > 0) {
+    result.sync.add(step.believed_time - step.true_time, (step.believed_tip - step.tip).norm());
+    result.sync_programmed_feed.add(step.programmed_feed_time - step.true_time, (path_position(path, step.programmed_feed_time) - step.tip).norm());
   }
+  if (step.on_target) {
+    LoopSample s = step.sample;
+    s.offset_sd = predictor.predicted_offset_sd(step.true_time);
+    s.learned = result.learned_at >= 0;
+    result.samples.push_back(s);
+    auto& f = result.passes[static_cast<std::size_t>(step.pass - 1)];
+    ++f.samples;
+    f.mean_abs_error += std::abs(s.error);
+    f.max_abs_error = std::max(f.max_abs_error, std::abs(s.error));
+    f.max_abs_distortion = std::max(f.max_abs_distortion, std::abs(s.distortion));
+  }
+}
+
+// 2. A new setpoint, for the middle of the interval it will hold (0 when the loop does not correct).
+void command_setpoint(const LoopMachine::Step& step, bool correct, LoopMachine& machine, Predictor& predictor, ClosedLoopResult& result) {
+  const double applied = correct ? predictor.tool_offset(step.setpoint_time) : 0.0;
+  machine.command(applied);
+  predictor.record_offset(step.believed_time, applied);
+  result.offsets.push_back({step.clock, step.believed_time, step.true_time, applied});
+}
+
+// 3. A profile, read where the sheet truly is and handed to the predictor where it is believed to be.
+void take_profile(const LoopMachine::Step& step, LoopMachine& machine, Predictor& predictor, ClosedLoopResult& result) {
+  const auto points = machine.scan();
+  ToolPose pose;
+  pose.tip = step.believed_tip;
+  pose.applied_offset = machine.applied();
+  const ProfileReport report = predictor.add_profile(step.believed_time, pose, points);
+  ++result.profiles;
+  result.points.used += report.used, result.points.used_top += report.used_top, result.points.outside += report.outside, result.points.not_yet_cut += report.not_yet_cut;
+  result.points.invalid += report.invalid, result.points.out_of_range += report.out_of_range;
+  if (step.pass > 0) {
+    auto& f = result.passes[static_cast<std::size_t>(step.pass - 1)];
+    ++f.profiles;
+    f.points_used += report.used;
+  }
+  if (result.learned_at < 0 && predictor.learned()) result.learned_at = step.true_time;
+}
+
+// 4. At pass `pass`'s end (0-based): the final shape predicted now, against the truth's.
+void compare_final_shape(std::size_t pass, const Predictor& predictor, const TruePart& truth, ClosedLoopResult& result) {
+  FinalShape shape = predictor.final_shape();
+  result.estimates.push_back(predictor.estimate());
+  auto& f = result.passes[pass];
+  const Eigen::ArrayXd e = (shape.displacement.row(2) - truth.final_displacement.row(2)).transpose().array().abs();
+  f.shape_max_error = e.maxCoeff();
+  f.shape_rms_error = std::sqrt(e.square().mean());
+  f.shape_band_coverage = (e <= 1.96 * shape.sd.row(2).transpose().array()).cast<double>().mean();
+  f.learned = result.learned_at >= 0;
+  if (f.samples > 0) f.mean_abs_error /= f.samples;
+  result.shapes.push_back(std::move(shape));
+}
+
+// The run's totals, once the program has ended.
+void close_result(const LoopMachine& machine, const Predictor& predictor, ClosedLoopResult& result) {
   result.calibration = machine.calibration();
   result.rejections = predictor.rejections();
   result.offset_bound = predictor.max_offset();
   result.sync.finish();
   result.sync_programmed_feed.finish();
   result.estimate = predictor.estimate();
+}
+
+}  // namespace
+
+ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void(double)>& progress) const {
+  const auto start = std::chrono::steady_clock::now();
+  LoopMachine machine(model_, truth, settings_);
+  Predictor predictor(model_, predictor_settings_);
+  ClosedLoopResult result = result_per_pass(passes_);
+  std::size_t next_shape = 0;
+  const long steps = machine.steps();
+  for (long k = 0; k <= steps; ++k) {
+    const LoopMachine::Step step = machine.advance(k);
+    record_cut(step, model_.path, predictor, result);
+    if (step.refresh) command_setpoint(step, settings_.correct, machine, predictor, result);
+    if (step.scan) take_profile(step, machine, predictor, result);
+    for (; next_shape < passes_.size() && (step.true_time >= passes_[next_shape].end || k == steps); ++next_shape)
+      compare_final_shape(next_shape, predictor, truth, result);
+    if (progress && k % std::max(1L, steps / 100) == 0) progress(static_cast<double>(k) / static_cast<double>(steps));
+  }
+  close_result(machine, predictor, result);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
