@@ -1,24 +1,27 @@
 #include "levelset/pocket_toolpath.hpp"
 
+#include "paths/cutter/stepover.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 namespace drom::levelset {
 
+// On level ground the flat bottom leaves nothing; what is left between the two corner traces is the
+// cutter's flat-ground scallop with the corner radius (paths/cutter/stepover.hpp), the corners' own
+// height once they no longer overlap.
 double scallop_height(const paths::ToolAssembly& tool, double stepover) {
-  const double r = tool.cutter.corner_radius, flat = 2 * (tool.cutter.radius - r);
+  const double flat = 2 * (tool.cutter.radius - tool.cutter.corner_radius);
   if (stepover <= flat) return 0;
-  const double half = 0.5 * (stepover - flat);
-  if (half >= r) return r;  // the corners no longer overlap
-  return r - std::sqrt(r * r - half * half);
+  return paths::flat_scallop(stepover - flat, tool.cutter.corner_radius);
 }
 
 double stepover_for_scallop(const paths::ToolAssembly& tool, double scallop) {
   const double r = tool.cutter.corner_radius;
   if (r <= 0) throw std::invalid_argument("a flat end mill leaves no scallop: set the stepover directly");
   if (!(scallop > 0 && scallop < r)) throw std::invalid_argument("scallop height must lie in (0, corner radius)");
-  return 2 * (tool.cutter.radius - r) + 2 * std::sqrt(2 * r * scallop - scallop * scallop);
+  return paths::level_ground_stepover(tool.cutter, scallop);
 }
 
 double tool_tip_on_floor(const geometry::PartShape& shape, const paths::ToolAssembly& tool, double floor_t, double u, double v) {

@@ -161,14 +161,14 @@ struct PacketInputs {
 };
 
 // Stage 5, one packet: its drop frame, roughing, finishing, programs and checks.
-PacketPlan plan_packet(std::size_t k, const CopyResult& out, const PacketInputs& in, Stopwatch& watch, const Say& say) {
+PacketPlan plan_packet(std::size_t k, int points, const CopyResult& out, const PacketInputs& in, Stopwatch& watch, const Say& say) {
   const CopySettings& s = in.settings;
   PacketPlan plan;
   plan.direction = out.packets.directions[k];
   plan.axis = out.visibility.directions.unit[static_cast<std::size_t>(plan.direction)];
   plan.rotary = out.visibility.rotary[static_cast<std::size_t>(plan.direction)];
   plan.frame = geometry::frame_along(plan.axis);
-  plan.points = out.packets.sizes()[k];
+  plan.points = points;
   std::vector<Eigen::Vector3d> mine;
   for (std::size_t i = 0; i < out.row_points.size(); ++i)
     if (out.packets.packet_of[i] == static_cast<int>(k)) mine.push_back(plan.frame * out.row_points[i]);
@@ -227,7 +227,9 @@ CopyResult copy_cloud(const geometry::PointCloud& cloud, const CopySettings& s, 
   std::optional<geometry::CloudVoxelMap> map;
   if (s.rough) map.emplace(collision, roughing_voxel(s.roughing));  // the obstacles too: roughing must not enter the base or a fixture
   watch.add_to("roughing");
-  for (std::size_t k = 0; k < out.packets.directions.size(); ++k) out.plans.push_back(plan_packet(k, out, {collision, map ? &*map : nullptr, s, kin}, watch, say));
+  const std::vector<int> sizes = out.packets.sizes();
+  for (std::size_t k = 0; k < out.packets.directions.size(); ++k)
+    out.plans.push_back(plan_packet(k, sizes[k], out, {collision, map ? &*map : nullptr, s, kin}, watch, say));
   return out;
 }
 

@@ -67,6 +67,7 @@ class CloudRoughingPlanner {
   const CloudRoughingSettings& s_;
   CloudRoughing& out_;
   const Tool& cutter_;
+  std::vector<Eigen::Vector3d> barycentres_;  // the map's voxels', drop frame
   geometry::CloudBins bins_;
   double diagonal_ = 0, half_step_ = 0, top_ = -kInfinity, tan_ramp_ = 0, traverse_ = 0, fine_ = 0;
   int nx_ = 0, ny_ = 0;
@@ -85,9 +86,10 @@ std::vector<Eigen::Vector3d> barycentres_in(const geometry::CloudVoxelMap& map, 
 
 CloudRoughingPlanner::CloudRoughingPlanner(const geometry::CloudVoxelMap& map, const Eigen::Matrix3d& q, const geometry::Box3& stock, const CloudArea& area,
                                            const CloudRoughingSettings& s, CloudRoughing& out)
-    : q_(q), stock_(stock), area_(area), s_(s), out_(out), cutter_(s.tool.cutter), bins_(barycentres_in(map, q), std::max(s.tool.cutter.radius / 2, map.edge())) {
+    : q_(q), stock_(stock), area_(area), s_(s), out_(out), cutter_(s.tool.cutter), barycentres_(barycentres_in(map, q)),
+      bins_(barycentres_, std::max(s.tool.cutter.radius / 2, map.edge())) {
   out.voxel = map.edge();
-  out.voxels = map.voxels().size();
+  out.voxels = barycentres_.size();
   // A barycentre stands for its voxel's points (within the diagonal) and for the tool's move to the
   // next node (within half a step): both widen the tool.
   diagonal_ = map.edge() * std::sqrt(3.0);

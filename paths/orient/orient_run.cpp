@@ -480,8 +480,7 @@ struct OrientFigures {
   int threads = 0;
 };
 
-json orient_summary(const OrientCase& c, const OrientFigures& f, const OrientResult& result) {
-  const OrientationExtremes e = orientation_extremes(result.passes);
+json orient_summary(const OrientCase& c, const OrientFigures& f, const OrientationExtremes& e, const OrientResult& result) {
   const OrientScene& scene = f.scene;
   json j;
   j["command"] = "orient";
@@ -511,8 +510,7 @@ json orient_summary(const OrientCase& c, const OrientFigures& f, const OrientRes
   return j;
 }
 
-std::string result_line(const OrientResult& result, const OnMachine& on) {
-  const OrientationExtremes e = orientation_extremes(result.passes);
+std::string result_line(const OrientResult& result, const OrientationExtremes& e, const OnMachine& on) {
   return "  max deviation " + std::to_string(e.deviation * kDeg) + " deg; worst clearance " + std::to_string(result.after.worst_clearance) + " mm (" +
          std::to_string(result.after.collisions.size()) + " violations; programmed axis: " + std::to_string(result.before.worst_clearance) + " mm, " +
          std::to_string(result.before.collisions.size()) + " violations); cycle time " + std::to_string(on.cycle_before) + " -> " + std::to_string(on.cycle_after) + " s";
@@ -648,8 +646,9 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   const ProofTimes proof = prove_clearance(*pre.checker, poses, arena, result);
   const OnMachine on = put_on_machine(c, scene.tool, kin, poses, result);
 
-  result.summary = orient_summary(c, {scene, pre, integration, proof, on, m, origin, arena.max_concurrency()}, result);
-  say(result_line(result, on));
+  const OrientationExtremes extremes = orientation_extremes(result.passes);
+  result.summary = orient_summary(c, {scene, pre, integration, proof, on, m, origin, arena.max_concurrency()}, extremes, result);
+  say(result_line(result, extremes, on));
   std::optional<Relaxation> relaxation;
   if (c.relax) {
     relaxation = relax_programmed_axes(c, scene, kin, *pre.checker, arena, result);
