@@ -9,7 +9,7 @@
 //   build/bench/station_update_bench CASE.toml [--set key=value]... [--stations 32] [--chunk 16, or 0: chosen as drom offline's "auto"] [--ccx 1]
 // e.g. the quick flat plate:
 //   build/bench/station_update_bench cases/flat_plate.toml --set mesh.nx=20 --set mesh.ny=20 --set path.station_spacing=100
-#include "case/case.hpp"
+#include "case_file/case.hpp"
 #include "fem/elastic_problem.hpp"
 #include "fem/supports.hpp"
 #include "offline/calculix_export.hpp"
@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--ccx")) calculix = std::atoi(argv[i + 1]) != 0;
   }
   const SingleThreadedKernels single_threaded_kernels;  // as a drom offline worker
-  const cases::Case c = cases::load_case(std::string(argv[1]), overrides);
+  const case_file::Case c = case_file::load_case(std::string(argv[1]), overrides);
   const offline::PartModel part = offline::build_part(c);
   const auto clamped = offline::clamp_dofs(c, part);
   offline::MachiningRun run(c, part);

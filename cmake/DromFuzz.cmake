@@ -27,7 +27,7 @@ macro(drom_sanitized_tests executable filter timeout)
   set(DROM_SANITIZED_TIMEOUT_${executable} ${timeout})
 endmacro()
 drom_sanitized_tests(support_tests "*" 60)      # slowest 3.6 s: the PNG plot (a child process)
-drom_sanitized_tests(case_tests "*" 60)         # 0.9 s
+drom_sanitized_tests(case_file_tests "*" 60)         # 0.9 s
 drom_sanitized_tests(reduce_tests "*" 60)       # 1.8 s
 drom_sanitized_tests(machine_tests "*" 120)     # 11.1 s: LinuxCNC's milling samples through rs274
 drom_sanitized_tests(geometry_tests "*" 120)    # 23.9 s: a STEP file that crashes OpenCASCADE

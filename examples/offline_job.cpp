@@ -8,7 +8,7 @@
 // The job simulates the machining station by station, once per unit stress profile of the case's
 // basis, and writes the snapshot database (database.h5) and summary.json into --out. Interrupt it and
 // run it again with --resume: it continues where it stopped and writes the same bytes.
-#include "case/case.hpp"
+#include "case_file/case.hpp"
 #include "offline/offline_job.hpp"
 #include "support/input_error.hpp"
 
@@ -31,7 +31,7 @@ int main(int argc, char* argv[]) {
   }
   try {
     // 2. The case: a file, or the embedded flat plate; every key checked, --set applied.
-    const drom::cases::Case c = drom::cases::load_case(case_file, overrides);
+    const drom::case_file::Case c = drom::case_file::load_case(case_file, overrides);
 
     // 3. Progress through the callback (return false to stop; the job is then resumable).
     options.quiet = true;

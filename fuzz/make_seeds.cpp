@@ -4,7 +4,7 @@
 // their stress profiles as tables, their stock as STL, the chapter 2 blank as a measured surface,
 // and the flat plate's coarse snapshot database and light model (the base files of the *_fields
 // harnesses). Deterministic: the same tree gives the same seeds.
-#include "case/case.hpp"
+#include "case_file/case.hpp"
 #include "fem/residual_stress.hpp"
 #include "geometry/cloud_writer.hpp"
 #include "levelset/gcode.hpp"
@@ -171,9 +171,9 @@ int main(int argc, char** argv) {
     for (const char* name : {"flat_plate", "curved_panel"}) {
       const fs::path file = kCases / (std::string(name) + ".toml");
       put(corpus / "case_file" / (std::string(name) + ".toml"), file_text(file));
-      const cases::Case written = cases::load_case(file, {});
+      const case_file::Case written = case_file::load_case(file, {});
       put(corpus / "case_overrides" / (std::string(name) + "_quick"), joined(written.run_quick));
-      const cases::Case c = cases::load_case(file, written.run_quick);
+      const case_file::Case c = case_file::load_case(file, written.run_quick);
       const offline::PartModel part = offline::build_part(c);
       // The program's first 40 lines (its header, a plunge, arcs where it has them): a whole program is
       // tens of kB, and a small seed fuzzes faster.
@@ -252,7 +252,7 @@ int main(int argc, char** argv) {
 
     // The flat plate's coarsest database and model (3 x 3 x 5 Hex20, a station every 400 mm: 0.23 MB and
     // 39 kB, a third of the 5 x 5 x 5 plate's, so a harness writes and seals less per input).
-    const cases::Case coarse = cases::load_case(kCases / "flat_plate.toml",
+    const case_file::Case coarse = case_file::load_case(kCases / "flat_plate.toml",
                                                 {"mesh.nx=3", "mesh.ny=3", "path.station_spacing=400", "removal.voxel_size=2.0", "clamps.0.box=[0,200,0,200]",
                                                  "clamps.1.box=[800,1000,0,200]", "clamps.2.box=[0,200,800,1000]", "clamps.3.box=[800,1000,800,1000]"});
     offline::JobOptions options;

@@ -1,6 +1,6 @@
 #pragma once
 // A free-form surface declared in a TOML file: a [surface] table with a Bézier, B-spline or NURBS
-// control net, or a face of a STEP file. Any module reading a case (paths/, case/) calls this with
+// control net, or a face of a STEP file. Any module reading a case (paths/, case_file/) calls this with
 // its own TomlReader, so geometry/ depends on support/ only. Keys: docs/case-files.md (finishing).
 #include "geometry/nurbs_surface.hpp"
 #include "geometry/trim_loops.hpp"

@@ -23,7 +23,7 @@ nlohmann::json Headline::to_json() const {
           {"final_shape_band95_coverage_end", band_coverage_end}};
 }
 
-Headline headline(const online::ClosedLoopResult& corrected, const online::ClosedLoopResult& uncorrected, int shape_pass) {
+Headline headline(const online::LoopSimulationResult& corrected, const online::LoopSimulationResult& uncorrected, int shape_pass) {
   Headline h;
   h.shape_pass = shape_pass;
   h.learned_at = corrected.learned_at;
@@ -100,8 +100,8 @@ std::string corrected_gcode(const reduce::LightModel& model, const std::vector<o
 namespace {
 
 // Per pass: path error with and without correction, and the final-shape prediction at its end.
-void write_pass_table(const std::filesystem::path& out, const cases::Case& c, const online::ClosedLoopResult& corrected,
-                      const online::ClosedLoopResult& uncorrected, std::vector<std::string>& files) {
+void write_pass_table(const std::filesystem::path& out, const case_file::Case& c, const online::LoopSimulationResult& corrected,
+                      const online::LoopSimulationResult& uncorrected, std::vector<std::string>& files) {
   char line[512];
   std::string csv =
       "pass,start_s,end_s,uncorrected_mean_mm,uncorrected_max_mm,corrected_mean_mm,corrected_max_mm,learned_by_end,"
@@ -127,7 +127,7 @@ void write_pass_table(const std::filesystem::path& out, const cases::Case& c, co
   if (write_png_plot(out / "passes.png", plot)) files.push_back("passes.png");
 }
 
-void write_shape_error_plot(const std::filesystem::path& out, const cases::Case& c, const online::ClosedLoopResult& corrected,
+void write_shape_error_plot(const std::filesystem::path& out, const case_file::Case& c, const online::LoopSimulationResult& corrected,
                             std::vector<std::string>& files) {
   PlotSeries se{"final-shape max error (with correction)", {}, {}, "o-"}, sr{"RMS error", {}, {}, "s--"};
   for (const auto& a : corrected.passes) se.x.push_back(a.pass), se.y.push_back(std::max(a.shape_max_error, 1e-7)), sr.x.push_back(a.pass), sr.y.push_back(std::max(a.shape_rms_error, 1e-7));
@@ -142,7 +142,7 @@ void write_shape_error_plot(const std::filesystem::path& out, const cases::Case&
 }
 
 // Every step on the floor, both runs (the seed's figs. 3.44 and 3.61 plot this along the path).
-void write_path_samples(const std::filesystem::path& out, const online::ClosedLoopResult& corrected, const online::ClosedLoopResult& uncorrected,
+void write_path_samples(const std::filesystem::path& out, const online::LoopSimulationResult& corrected, const online::LoopSimulationResult& uncorrected,
                         std::vector<std::string>& files) {
   char line[512];
   std::string csv = "run,clock_s,program_time_s,pass,x_mm,y_mm,offset_mm,offset_sd_mm,distortion_mm,error_mm,learned\n";
@@ -156,7 +156,7 @@ void write_path_samples(const std::filesystem::path& out, const online::ClosedLo
   files.push_back("path_samples.csv");
 }
 
-void write_offset_stream(const std::filesystem::path& out, const online::ClosedLoopResult& corrected, std::vector<std::string>& files) {
+void write_offset_stream(const std::filesystem::path& out, const online::LoopSimulationResult& corrected, std::vector<std::string>& files) {
   char line[512];
   std::string csv = "clock_s,believed_program_time_s,true_program_time_s,offset_mm\n";
   for (const auto& o : corrected.offsets) {
@@ -168,8 +168,8 @@ void write_offset_stream(const std::filesystem::path& out, const online::ClosedL
 }
 
 // Final-shape predictions (with their band) against the truth, at the chosen passes and the last.
-void write_final_shape_frames(const std::filesystem::path& out, const cases::Case& c, const online::TruePart& truth,
-                              const online::ClosedLoopResult& corrected, std::vector<std::string>& files) {
+void write_final_shape_frames(const std::filesystem::path& out, const case_file::Case& c, const online::TruePart& truth,
+                              const online::LoopSimulationResult& corrected, std::vector<std::string>& files) {
   std::vector<int> chosen = c.shape_vtk_passes;
   chosen.push_back(static_cast<int>(corrected.passes.size()));
   std::sort(chosen.begin(), chosen.end());
@@ -203,8 +203,8 @@ void write_final_shape_frames(const std::filesystem::path& out, const cases::Cas
 
 }  // namespace
 
-std::vector<std::string> write_loop_outputs(const std::filesystem::path& out, const cases::Case& c, const reduce::LightModel& model, const online::TruePart& truth,
-                                            const online::ClosedLoopResult& corrected, const online::ClosedLoopResult& uncorrected) {
+std::vector<std::string> write_loop_outputs(const std::filesystem::path& out, const case_file::Case& c, const reduce::LightModel& model, const online::TruePart& truth,
+                                            const online::LoopSimulationResult& corrected, const online::LoopSimulationResult& uncorrected) {
   std::vector<std::string> files;
   write_pass_table(out, c, corrected, uncorrected, files);
   write_shape_error_plot(out, c, corrected, files);

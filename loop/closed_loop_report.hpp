@@ -2,8 +2,8 @@
 // The closed loop's outputs (docs/outputs.md, "drom run"): per-pass tables, plots, final-shape VTK,
 // the offset stream, the corrected program, and the headline figures both drom run and drom study
 // report.
-#include "case/case.hpp"
-#include "online/closed_loop.hpp"
+#include "case_file/case.hpp"
+#include "online/loop_simulation.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -23,12 +23,12 @@ struct Headline {
   nlohmann::json to_json() const;
 };
 
-Headline headline(const online::ClosedLoopResult& corrected, const online::ClosedLoopResult& uncorrected, int shape_pass);
+Headline headline(const online::LoopSimulationResult& corrected, const online::LoopSimulationResult& uncorrected, int shape_pass);
 
 // Writes passes.csv/.png, path_samples.csv, final_shape_error.csv/.png, final_shape_pass_<k>.vtu
 // (+ .pvd), offsets.csv and corrected_program.nc into `out`. Returns the files written.
-std::vector<std::string> write_loop_outputs(const std::filesystem::path& out, const cases::Case& c, const reduce::LightModel& model, const online::TruePart& truth,
-                                            const online::ClosedLoopResult& corrected, const online::ClosedLoopResult& uncorrected);
+std::vector<std::string> write_loop_outputs(const std::filesystem::path& out, const case_file::Case& c, const reduce::LightModel& model, const online::TruePart& truth,
+                                            const online::LoopSimulationResult& corrected, const online::LoopSimulationResult& uncorrected);
 
 // The corrected program: the model's path with the commanded offsets written into Z on the floor.
 std::string corrected_gcode(const reduce::LightModel& model, const std::vector<online::Pass>& passes, const std::vector<online::OffsetCommand>& offsets,

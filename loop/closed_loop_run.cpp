@@ -26,7 +26,7 @@ namespace drom::loop {
 
 namespace {
 
-nlohmann::json loop_json(const online::ClosedLoopResult& r) {
+nlohmann::json loop_json(const online::LoopSimulationResult& r) {
   nlohmann::json passes = nlohmann::json::array();
   for (const auto& p : r.passes)
     passes.push_back({{"pass", p.pass},
@@ -58,7 +58,7 @@ nlohmann::json loop_json(const online::ClosedLoopResult& r) {
 
 // How the machine moved and how well the synchronizer followed it: the real against the programmed
 // time, and the believed position's error as run and as a programmed-feed reckoning would have had it.
-nlohmann::json sync_json(const cases::Case& c, const online::ClosedLoopSettings& s, const online::ClosedLoopResult& r) {
+nlohmann::json sync_json(const case_file::Case& c, const online::LoopSimulationSettings& s, const online::LoopSimulationResult& r) {
   auto errors = [](const online::SyncError& e) {
     return nlohmann::json{{"max_program_time_error_s", e.max_time}, {"max_shift_mm", e.max_shift}, {"rms_shift_mm", e.rms_shift}, {"steps_on_floor", e.samples}};
   };
@@ -74,19 +74,19 @@ nlohmann::json sync_json(const cases::Case& c, const online::ClosedLoopSettings&
 
 }  // namespace
 
-RunResult run_closed_loop(const cases::Case& c, const RunOptions& options) {
+RunResult run_closed_loop(const case_file::Case& c, const RunOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   std::filesystem::create_directories(options.out);
   const ClosedLoopInputs in = prepare_closed_loop(c, options);
 
   // The two loops share everything but the correction; each has its own copy of the truth.
-  online::ClosedLoopSettings with = loop_settings(c, in.model), without = with;
+  online::LoopSimulationSettings with = loop_settings(c, in.model), without = with;
   with.correct = true;
   without.correct = false;
-  const online::ClosedLoop corrected_loop(in.model, predictor_settings(c, in.model), with), uncorrected_loop(in.model, predictor_settings(c, in.model), without);
+  const online::LoopSimulation corrected_loop(in.model, predictor_settings(c, in.model), with), uncorrected_loop(in.model, predictor_settings(c, in.model), without);
   const TruthPlay truth_a = in.play(), truth_b = in.play();
   if (!options.quiet) std::cerr << "drom run: the closed loop, with and without correction (" << corrected_loop.passes().size() << " passes)\n";
-  online::ClosedLoopResult corrected, uncorrected;
+  online::LoopSimulationResult corrected, uncorrected;
   std::thread side([&] { uncorrected = uncorrected_loop.run(truth_b.part); });
   corrected = corrected_loop.run(truth_a.part, [&](double f) {
     if (!options.quiet) std::fprintf(stderr, "\r  %3.0f %%", 100 * f);

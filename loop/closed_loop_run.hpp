@@ -16,10 +16,10 @@ namespace drom::loop {
 struct RunResult {
   Headline headline;
   nlohmann::json summary;  // summary.json's content
-  online::ClosedLoopResult corrected, uncorrected;
+  online::LoopSimulationResult corrected, uncorrected;
   int model_rank = 0;
 };
 
-RunResult run_closed_loop(const cases::Case& c, const RunOptions& options);
+RunResult run_closed_loop(const case_file::Case& c, const RunOptions& options);
 
 }  // namespace drom::loop

@@ -23,12 +23,12 @@
 
 namespace drom::loop {
 
-cases::Case load_run_case(const std::optional<std::filesystem::path>& path, const std::vector<std::string>& overrides) {
-  const cases::Case as_written = cases::load_case(path, overrides);
+case_file::Case load_run_case(const std::optional<std::filesystem::path>& path, const std::vector<std::string>& overrides) {
+  const case_file::Case as_written = case_file::load_case(path, overrides);
   if (as_written.run_scale != "quick" || as_written.run_quick.empty()) return as_written;
   std::vector<std::string> all = as_written.run_quick;
   all.insert(all.end(), overrides.begin(), overrides.end());
-  return cases::load_case(path, all);
+  return case_file::load_case(path, all);
 }
 
 namespace {
@@ -39,13 +39,13 @@ const std::vector<std::string> kPathKeys = {"part.stl", "stress.table", "truth.t
 // A stage (offline or truth) to compute: its case and options, for `text` in `dir`; none when
 // dir/database.h5 already holds it (same case, this drom's format).
 struct Stage {
-  cases::Case c;
+  case_file::Case c;
   offline::JobOptions options;
 };
 
 // The stage for `text` in `dir`, as it runs (rank 0 has decided it must, and prepared `dir`).
 Stage stage_in(const std::string& text, const std::filesystem::path& dir, const RunOptions& options) {
-  Stage stage{cases::case_from_text(text, (dir / "case.toml").string()), {}};
+  Stage stage{case_file::case_from_text(text, (dir / "case.toml").string()), {}};
   stage.options.out = dir;
   stage.options.quiet = options.quiet;
   stage.options.threads = options.threads;
@@ -58,7 +58,7 @@ Stage stage_in(const std::string& text, const std::filesystem::path& dir, const 
 std::optional<Stage> stage_to_run(const std::string& text, const std::filesystem::path& dir, const RunOptions& options) {
   const auto case_file = dir / "case.toml";
   const auto database = dir / "database.h5";
-  const cases::Case c = cases::case_from_text(text, case_file.string());
+  const case_file::Case c = case_file::case_from_text(text, case_file.string());
   if (std::filesystem::exists(database)) {
     bool current = false;
     try {
@@ -88,7 +88,7 @@ void check_finished(const offline::JobResult& result, const std::filesystem::pat
 //    profile on the same mesh and program. When both must be computed, one pass serves them: one
 //    factorization per station, each database the one its own stage would write. Rank 0 decides
 //    what is computed (and clears stale databases); the other ranks of an MPI job follow it.
-void machining_stages(const cases::Case& c, const RunOptions& options, ClosedLoopInputs& in) {
+void machining_stages(const case_file::Case& c, const RunOptions& options, ClosedLoopInputs& in) {
   offline::SoloTeam solo;
   offline::JobTeam& team = options.team ? *options.team : solo;
   auto strip = [&](std::vector<std::string> tables) { return case_text_without(c.resolved_toml, tables, kPathKeys, c.origin); };
@@ -136,12 +136,12 @@ void machining_stages(const cases::Case& c, const RunOptions& options, ClosedLoo
 
 }  // namespace
 
-void help_prepare_closed_loop(const cases::Case& c, const RunOptions& options) {
+void help_prepare_closed_loop(const case_file::Case& c, const RunOptions& options) {
   ClosedLoopInputs ignored;
   machining_stages(c, options, ignored);
 }
 
-ClosedLoopInputs prepare_closed_loop(const cases::Case& c, const RunOptions& options) {
+ClosedLoopInputs prepare_closed_loop(const case_file::Case& c, const RunOptions& options) {
   ClosedLoopInputs in;
   machining_stages(c, options, in);  // first: the other ranks of an MPI job wait for it
   in.shape = offline::build_part(c).shape;
@@ -227,7 +227,7 @@ TruthPlay ClosedLoopInputs::play(double factor) const {
   return p;
 }
 
-online::PredictorSettings predictor_settings(const cases::Case& c, const reduce::LightModel& model) {
+online::PredictorSettings predictor_settings(const case_file::Case& c, const reduce::LightModel& model) {
   online::PredictorSettings s;
   s.noise_sd = std::max(std::hypot(c.sensor_noise, model.error_bound()), 1e-6);
   s.use_stock_top = c.use_stock_top;
@@ -241,8 +241,8 @@ online::PredictorSettings predictor_settings(const cases::Case& c, const reduce:
   return s;
 }
 
-online::ClosedLoopSettings loop_settings(const cases::Case& c, const reduce::LightModel& model) {
-  online::ClosedLoopSettings s;
+online::LoopSimulationSettings loop_settings(const case_file::Case& c, const reduce::LightModel& model) {
+  online::LoopSimulationSettings s;
   if (!c.sync_machine.empty()) {
     const machine::Machine m = machine::load_machine(c.sync_machine);
     s.machine_motion = std::make_shared<const machine::ProgramClock>(model.path, m, c.feed_override);

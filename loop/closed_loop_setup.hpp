@@ -2,10 +2,10 @@
 // What drom run and drom study share: the case at the run's scale, the offline database, the light
 // model and the truth run under --out (each computed once and reused while the case that made it is
 // unchanged), and the closed loop's settings from the case.
-#include "case/case.hpp"
+#include "case_file/case.hpp"
 #include "geometry/part_shape.hpp"
 #include "offline/job_team.hpp"
-#include "online/closed_loop.hpp"
+#include "online/loop_simulation.hpp"
 #include "reduce/light_model.hpp"
 
 #include <filesystem>
@@ -18,7 +18,7 @@ namespace drom::loop {
 
 // The case as drom run runs it: with [run] scale = "quick", run.quick's overrides first, then the
 // user's (so --set wins).
-cases::Case load_run_case(const std::optional<std::filesystem::path>& path, const std::vector<std::string>& overrides);
+case_file::Case load_run_case(const std::optional<std::filesystem::path>& path, const std::vector<std::string>& overrides);
 
 // Where and how drom run and drom study work.
 struct RunOptions {
@@ -59,16 +59,16 @@ struct ClosedLoopInputs {
 
 // Runs (or reuses) out/offline, out/model and out/truth for the case. Progress on stderr unless quiet.
 // With options.team, this is rank 0's part; the other ranks call help_prepare_closed_loop.
-ClosedLoopInputs prepare_closed_loop(const cases::Case& c, const RunOptions& options);
+ClosedLoopInputs prepare_closed_loop(const case_file::Case& c, const RunOptions& options);
 // A rank after rank 0 of an MPI drom run: its share of the machining pass that prepare_closed_loop
 // runs on rank 0, nothing else.
-void help_prepare_closed_loop(const cases::Case& c, const RunOptions& options);
+void help_prepare_closed_loop(const case_file::Case& c, const RunOptions& options);
 
 // The measurement sigma is the sensor's noise and the model's own error bound together: a noise-free
 // sensor still sees what the model cannot represent, and the band should say so.
-online::PredictorSettings predictor_settings(const cases::Case& c, const reduce::LightModel& model);
+online::PredictorSettings predictor_settings(const case_file::Case& c, const reduce::LightModel& model);
 // The loop's settings; the machine's real motion along the model's path ([sync] machine) is
 // predicted here (machine/program_clock.hpp).
-online::ClosedLoopSettings loop_settings(const cases::Case& c, const reduce::LightModel& model);
+online::LoopSimulationSettings loop_settings(const case_file::Case& c, const reduce::LightModel& model);
 
 }  // namespace drom::loop

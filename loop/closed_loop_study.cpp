@@ -26,18 +26,18 @@ namespace {
 
 struct Parameter {
   const char* label;
-  void (*apply)(cases::Case&, double);
+  void (*apply)(case_file::Case&, double);
 };
 
 const std::map<std::string, Parameter>& parameters() {
   static const std::map<std::string, Parameter> p = {
-      {"noise", {"sensor noise sigma (mm)", [](cases::Case& c, double v) { c.sensor_noise = v; }}},
-      {"angle", {"sheet angle to the feed (deg)", [](cases::Case& c, double v) { c.sensor_angle = v; }}},
-      {"refresh", {"offset refresh rate (Hz)", [](cases::Case& c, double v) { c.refresh_rate = v; }}},
-      {"calibration", {"sensor offset error along the feed (mm)", [](cases::Case& c, double v) { c.sensor_offset_error[0] = v; }}},
-      {"desync", {"synchronization delay (s)", [](cases::Case& c, double v) { c.desync = v; }}},
-      {"amplitude", {"stress amplitude (x the truth's)", [](cases::Case&, double) {}}},
-      {"seed", {"sensor noise draw (seed)", [](cases::Case& c, double v) { c.sensor_seed = static_cast<std::uint32_t>(v); }}},
+      {"noise", {"sensor noise sigma (mm)", [](case_file::Case& c, double v) { c.sensor_noise = v; }}},
+      {"angle", {"sheet angle to the feed (deg)", [](case_file::Case& c, double v) { c.sensor_angle = v; }}},
+      {"refresh", {"offset refresh rate (Hz)", [](case_file::Case& c, double v) { c.refresh_rate = v; }}},
+      {"calibration", {"sensor offset error along the feed (mm)", [](case_file::Case& c, double v) { c.sensor_offset_error[0] = v; }}},
+      {"desync", {"synchronization delay (s)", [](case_file::Case& c, double v) { c.desync = v; }}},
+      {"amplitude", {"stress amplitude (x the truth's)", [](case_file::Case&, double) {}}},
+      {"seed", {"sensor noise draw (seed)", [](case_file::Case& c, double v) { c.sensor_seed = static_cast<std::uint32_t>(v); }}},
   };
   return p;
 }
@@ -50,7 +50,7 @@ std::vector<std::string> study_parameters() {
   return names;
 }
 
-nlohmann::json run_study(const cases::Case& base, const std::string& parameter_name, const std::vector<double>& values, const RunOptions& options) {
+nlohmann::json run_study(const case_file::Case& base, const std::string& parameter_name, const std::vector<double>& values, const RunOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const auto it = parameters().find(parameter_name);
   if (it == parameters().end()) {
@@ -70,15 +70,15 @@ nlohmann::json run_study(const cases::Case& base, const std::string& parameter_n
       shape_end{"final-shape error, end", {}, {}, "^-"}, open_loop{"path error without correction, max", {}, {}, "x--"};
   nlohmann::json rows = nlohmann::json::array();
   for (const double value : values) {
-    cases::Case c = base;
+    case_file::Case c = base;
     parameter.apply(c, value);
     const double factor = parameter_name == "amplitude" ? value : 1.0;
-    online::ClosedLoopSettings with = loop_settings(c, in.model), without = with;
+    online::LoopSimulationSettings with = loop_settings(c, in.model), without = with;
     with.correct = true;
     without.correct = false;
-    const online::ClosedLoop corrected_loop(in.model, predictor_settings(c, in.model), with), uncorrected_loop(in.model, predictor_settings(c, in.model), without);
+    const online::LoopSimulation corrected_loop(in.model, predictor_settings(c, in.model), with), uncorrected_loop(in.model, predictor_settings(c, in.model), without);
     const TruthPlay a = in.play(factor), b = in.play(factor);
-    online::ClosedLoopResult corrected, uncorrected;
+    online::LoopSimulationResult corrected, uncorrected;
     std::thread side([&] { uncorrected = uncorrected_loop.run(b.part); });
     corrected = corrected_loop.run(a.part);
     side.join();

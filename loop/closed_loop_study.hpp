@@ -17,6 +17,6 @@ std::vector<std::string> study_parameters();
 
 // Returns the summary; its "rows" hold each value's headline figures. Throws InputError for an
 // unknown parameter or no value.
-nlohmann::json run_study(const cases::Case& base, const std::string& parameter, const std::vector<double>& values, const RunOptions& options);
+nlohmann::json run_study(const case_file::Case& base, const std::string& parameter, const std::vector<double>& values, const RunOptions& options);
 
 }  // namespace drom::loop

@@ -9,7 +9,7 @@
 // `out`: station_<k>.inp (fem/calculix_deck.hpp), station_<k>_drom.csv (node,ux,uy,uz: drom's u,
 // full factorization), and summary.json. Run `ccx -i station_<k>` in `out`; its station_<k>.dat
 // holds ccx's u of every node.
-#include "case/case.hpp"
+#include "case_file/case.hpp"
 #include "fem/calculix_deck.hpp"
 #include "offline/offline_job.hpp"
 
@@ -32,6 +32,6 @@ struct CalculixExport {
 };
 
 // Throws InputError for a station outside the case's stations, or a mesh the deck cannot hold.
-CalculixExport export_calculix_station(const cases::Case& c, JobKind kind, std::size_t station, const std::filesystem::path& out);
+CalculixExport export_calculix_station(const case_file::Case& c, JobKind kind, std::size_t station, const std::filesystem::path& out);
 
 }  // namespace drom::offline

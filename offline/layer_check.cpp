@@ -44,7 +44,7 @@ Eigen::VectorXd record(const std::filesystem::path& out, const fem::ElasticProbl
   return u;
 }
 
-void describe_mesh(const cases::Case& c, const fem::Mesh& mesh, bool quiet) {
+void describe_mesh(const case_file::Case& c, const fem::Mesh& mesh, bool quiet) {
   if (!quiet)
     std::cerr << "      " << c.name << ": " << mesh.element_count() << " " << fem::element_name(mesh.type) << " elements, " << mesh.dof_count()
               << " unknowns\n";
@@ -62,7 +62,7 @@ Eigen::VectorXd solve_intact_clamped(const std::filesystem::path& out, fem::Elas
   return record(out, problem, "0_intact", problem.solve().col(0), pvd);
 }
 
-Eigen::VectorXd solve_thinned_clamped(const cases::Case& c, const PartModel& part, const std::filesystem::path& out, fem::ElasticProblem& problem,
+Eigen::VectorXd solve_thinned_clamped(const case_file::Case& c, const PartModel& part, const std::filesystem::path& out, fem::ElasticProblem& problem,
                                       fem::PvdCollection& pvd) {
   const auto criterion = c.removal_criterion == "centroid" ? fem::RemovalCriterion::Centroid : fem::RemovalCriterion::VolumeFraction;
   problem.set_activity(fem::layer_activity(part.mesh, part.shape, c.pocket_depth, criterion));
@@ -93,7 +93,7 @@ struct LayerStates {
   const Eigen::VectorXd& free_shape;
 };
 
-nlohmann::json layer_summary(const cases::Case& c, const fem::Mesh& mesh, const fem::ElasticProblem& problem, const LayerStates& states,
+nlohmann::json layer_summary(const case_file::Case& c, const fem::Mesh& mesh, const fem::ElasticProblem& problem, const LayerStates& states,
                              const Steps& steps) {
   auto max_vertical = [](const Eigen::VectorXd& u) {
     double m = 0;
@@ -122,7 +122,7 @@ nlohmann::json layer_summary(const cases::Case& c, const fem::Mesh& mesh, const 
 }
 
 // The free thinned plate is the closed-form case: compare curvatures away from the edges.
-nlohmann::json plate_curvature_against_closed_form(const cases::Case& c, const PartModel& part, const Eigen::VectorXd& free_shape) {
+nlohmann::json plate_curvature_against_closed_form(const case_file::Case& c, const PartModel& part, const Eigen::VectorXd& free_shape) {
   const auto& mesh = part.mesh;
   const auto centre = fem::nodes_where(mesh, [&](const Eigen::Vector3d& p) {
     return p.z() < 1e-9 && std::abs(p.x() - c.length_x / 2) < 0.2 * c.length_x && std::abs(p.y() - c.length_y / 2) < 0.2 * c.length_y;
@@ -135,7 +135,7 @@ nlohmann::json plate_curvature_against_closed_form(const cases::Case& c, const P
 
 }  // namespace
 
-nlohmann::json run_layer_check(const cases::Case& c, const std::filesystem::path& out, bool quiet) {
+nlohmann::json run_layer_check(const case_file::Case& c, const std::filesystem::path& out, bool quiet) {
   Steps steps(6, quiet);
   steps.begin("meshing the part");
   const PartModel part = build_part(c);

@@ -8,7 +8,7 @@
 
 namespace drom::offline {
 
-MachiningRun::MachiningRun(const cases::Case& c, const PartModel& part)
+MachiningRun::MachiningRun(const case_file::Case& c, const PartModel& part)
     : path_(build_toolpath(c, part)),
       timeline_(std::make_unique<levelset::PathTimeline>(path_)),
       stations_(c.stations == "waypoints" ? levelset::stations_at_waypoints(path_, *timeline_)

@@ -25,7 +25,7 @@ void write_stations(Hdf5Writer& h5, const std::vector<levelset::Station>& statio
 class MachiningRun {
  public:
   // Throws InputError when the toolpath has no cutting move.
-  MachiningRun(const cases::Case& c, const PartModel& part);
+  MachiningRun(const case_file::Case& c, const PartModel& part);
 
   const levelset::Toolpath& path() const { return path_; }
   const levelset::PathTimeline& timeline() const { return *timeline_; }

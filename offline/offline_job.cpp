@@ -164,7 +164,7 @@ std::string profile_name(const fem::StressProfile& prof) {
 struct Output {
   JobOptions options;
   bool truth = false;
-  cases::Case c;
+  case_file::Case c;
   std::string mode;
   std::uint64_t case_hash = 0;
   std::vector<fem::StressProfile> profiles;
@@ -177,7 +177,7 @@ struct Output {
 // What drom reduce needs beside the snapshots, so that it reads the database alone: the target
 // surface's and the final part's faces, the stock's top in the part's own coordinates, the pocket, the
 // tool and the programmed path with its times.
-void write_reduction_inputs(Hdf5Writer& h5, const cases::Case& c, const PartModel& part, const std::vector<int>& target, const std::vector<int>& top,
+void write_reduction_inputs(Hdf5Writer& h5, const case_file::Case& c, const PartModel& part, const std::vector<int>& target, const std::vector<int>& top,
                             const levelset::Toolpath& path, const std::vector<double>& final_activity) {
   const auto& mesh = part.mesh;
   auto faces_dataset = [&](const std::string& name, const std::vector<fem::BoundaryFace>& faces, const std::map<int, int>& local) {
@@ -240,7 +240,7 @@ struct Pass {
   std::vector<Output>& outputs;
   const JobOptions& options;  // the first output's: quiet, threads, stop_after, progress, stations, merge, team
   JobTeam& team;
-  const cases::Case& c;       // the case whose part is machined (machined_case)
+  const case_file::Case& c;       // the case whose part is machined (machined_case)
   bool quiet = false;         // only rank 0 speaks
   bool interactive = false;   // stderr is a terminal: progress is one line rewritten in place
   std::chrono::steady_clock::time_point start = {};
@@ -259,7 +259,7 @@ struct Pass {
 
 // The part from the case that names the truth: the cases may differ by [truth] only (and by the
 // loop's tables, which no machining reads), or the pass would not be theirs.
-const cases::Case& machined_case(const std::vector<Output>& outputs) {
+const case_file::Case& machined_case(const std::vector<Output>& outputs) {
   const auto with_truth = std::find_if(outputs.begin(), outputs.end(), [](const Output& o) { return o.truth; });
   return (with_truth != outputs.end() ? *with_truth : outputs.front()).c;
 }
@@ -273,7 +273,7 @@ struct PassPart {
 };
 
 PassPart prepare_part(const Pass& pass) {
-  const cases::Case& c = pass.c;
+  const case_file::Case& c = pass.c;
   PassPart part;
   on_every_rank(pass.team, [&] {
     const std::vector<std::string> not_machining = {"truth", "sensor", "sync", "control", "run"};
@@ -906,7 +906,7 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
 
 }  // namespace
 
-JobResult run_job(const cases::Case& c, JobKind kind, const JobOptions& options) {
+JobResult run_job(const case_file::Case& c, JobKind kind, const JobOptions& options) {
   std::vector<Output> outputs(1);
   outputs[0].options = options;
   outputs[0].truth = kind == JobKind::Truth;
@@ -914,7 +914,7 @@ JobResult run_job(const cases::Case& c, JobKind kind, const JobOptions& options)
   return simulate(outputs).front();
 }
 
-std::pair<JobResult, JobResult> run_offline_and_truth(const cases::Case& offline_case, const JobOptions& offline, const cases::Case& truth_case,
+std::pair<JobResult, JobResult> run_offline_and_truth(const case_file::Case& offline_case, const JobOptions& offline, const case_file::Case& truth_case,
                                                       const JobOptions& truth) {
   std::vector<Output> outputs(2);
   outputs[0].options = offline;

@@ -9,11 +9,11 @@
 // summary.json beside it.
 //
 // Example (examples/offline_job.cpp):
-//   const auto c = drom::cases::load_case("cases/curved_panel.toml", {"mesh.nx=12", "mesh.ny=12"});
+//   const auto c = drom::case_file::load_case("cases/curved_panel.toml", {"mesh.nx=12", "mesh.ny=12"});
 //   drom::offline::JobOptions options;
 //   options.out = "out/panel_db";
 //   const auto result = drom::offline::run_job(c, drom::offline::JobKind::Offline, options);
-#include "case/case.hpp"
+#include "case_file/case.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -59,13 +59,13 @@ struct JobResult {
 
 // Runs (or resumes) the job for the case. Throws InputError for bad input (a case whose mesh cannot
 // hold its pocket, a checkpoint of another case in `out`, ...).
-JobResult run_job(const cases::Case& c, JobKind kind, const JobOptions& options);
+JobResult run_job(const case_file::Case& c, JobKind kind, const JobOptions& options);
 
 // Both databases in one machining pass (drom run): one factorization per station serves the unit
 // profiles and the truth, and each database is the one run_job writes for it, bit for bit. The two
 // cases must machine the same part: they may differ by [truth] and the closed loop's tables only.
 // stop_after, threads, quiet and progress are taken from the offline job's options.
-std::pair<JobResult, JobResult> run_offline_and_truth(const cases::Case& offline_case, const JobOptions& offline, const cases::Case& truth_case,
+std::pair<JobResult, JobResult> run_offline_and_truth(const case_file::Case& offline_case, const JobOptions& offline, const case_file::Case& truth_case,
                                                       const JobOptions& truth);
 
 }  // namespace drom::offline

@@ -13,13 +13,13 @@
 
 namespace drom::offline {
 
-fem::ProfileParity parity_of(const cases::Case& c) {
+fem::ProfileParity parity_of(const case_file::Case& c) {
   if (c.parity == "even") return fem::ProfileParity::Even;
   if (c.parity == "odd") return fem::ProfileParity::Odd;
   return fem::ProfileParity::All;
 }
 
-PartModel build_part(const cases::Case& c) {
+PartModel build_part(const case_file::Case& c) {
   PartModel part;
   if (c.shape == "stl") {
     const fem::Plc plc = fem::read_closed_stl(c.stl);
@@ -60,13 +60,13 @@ PartModel build_part(const cases::Case& c) {
   return part;
 }
 
-std::vector<int> clamp_dofs(const cases::Case& c, const PartModel& part) {
+std::vector<int> clamp_dofs(const case_file::Case& c, const PartModel& part) {
   const auto faces = fem::boundary_faces(part.mesh);
   const auto& shape = part.shape;
   const double tol = 1e-6 * std::max({shape.length_u(), shape.length_v(), shape.thickness()});
   std::vector<int> dofs;
   for (std::size_t i = 0; i < c.clamps.size(); ++i) {
-    const cases::ClampSpec& clamp = c.clamps[i];
+    const case_file::ClampSpec& clamp = c.clamps[i];
     const auto nodes = fem::face_nodes_where(part.mesh, faces, [&](const Eigen::Vector3d& x) {
       const Eigen::Vector3d p = shape.to_parametric(x);
       bool on_face = false;
@@ -92,13 +92,13 @@ std::vector<int> clamp_dofs(const cases::Case& c, const PartModel& part) {
 }
 
 
-paths::ToolAssembly build_tool(const cases::Case& c) {
+paths::ToolAssembly build_tool(const case_file::Case& c) {
   if (c.tool_kind == "ball") return paths::ToolAssembly::ball(c.tool_radius, c.tool_flute_length);
   if (c.tool_kind == "bull_nose") return paths::ToolAssembly::bull_nose(c.tool_radius, c.tool_corner_radius, c.tool_flute_length);
   return paths::ToolAssembly::flat(c.tool_radius, c.tool_flute_length);
 }
 
-levelset::Toolpath build_toolpath(const cases::Case& c, const PartModel& part) {
+levelset::Toolpath build_toolpath(const case_file::Case& c, const PartModel& part) {
   if (!c.gcode.empty()) return levelset::read_gcode(c.gcode.string());
   const paths::ToolAssembly tool = build_tool(c);
   levelset::PocketPathSpec spec;
@@ -117,12 +117,12 @@ levelset::Toolpath build_toolpath(const cases::Case& c, const PartModel& part) {
   }
 }
 
-levelset::Workpiece build_workpiece(const cases::Case& c, const PartModel& part, double voxel_size) {
+levelset::Workpiece build_workpiece(const case_file::Case& c, const PartModel& part, double voxel_size) {
   if (c.shape == "stl") return levelset::Workpiece::from_surface(geometry::read_closed_stl(c.stl), voxel_size);
   return levelset::Workpiece::from_shape(part.shape);
 }
 
-double voxel_size_for(const cases::Case& c, const PartModel& part) {
+double voxel_size_for(const case_file::Case& c, const PartModel& part) {
   if (c.voxel_size > 0) return c.voxel_size;
   double thinnest = part.shape.thickness();
   for (int e = 0; e < part.mesh.element_count(); ++e) {
@@ -133,7 +133,7 @@ double voxel_size_for(const cases::Case& c, const PartModel& part) {
   return levelset::default_voxel_size(build_tool(c), c.pocket_depth, thinnest);
 }
 
-pgd::PgdSettings pgd_settings(const cases::Case& c) {
+pgd::PgdSettings pgd_settings(const case_file::Case& c) {
   pgd::PgdSettings s;
   const auto& k = c.pgd;
   if (k.residual_tolerance) s.residual_tolerance = *k.residual_tolerance;

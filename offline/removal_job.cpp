@@ -29,7 +29,7 @@ struct RemovalSweep {
 
 // What it is run on.
 struct RemovalInputs {
-  const cases::Case& c;
+  const case_file::Case& c;
   const fem::Mesh& mesh;
   MachiningRun& run;
   const std::vector<double>& volumes;  // per element
@@ -91,7 +91,7 @@ RemovalSweep sweep_stations(const RemovalInputs& in) {
   return sweep;
 }
 
-void write_removal_files(const cases::Case& c, const std::filesystem::path& out, const MachiningRun& run, const RemovalSweep& sweep,
+void write_removal_files(const case_file::Case& c, const std::filesystem::path& out, const MachiningRun& run, const RemovalSweep& sweep,
                          const std::vector<double>& volumes) {
   const std::size_t ns = run.stations().size(), ne = volumes.size();
   sweep.pvd.write(out / "removal.pvd");
@@ -110,7 +110,7 @@ void write_removal_files(const cases::Case& c, const std::filesystem::path& out,
   h5.commit();
 }
 
-nlohmann::json removal_summary(const cases::Case& c, const MachiningRun& run, const RemovalSweep& sweep, std::size_t elements,
+nlohmann::json removal_summary(const case_file::Case& c, const MachiningRun& run, const RemovalSweep& sweep, std::size_t elements,
                                std::chrono::steady_clock::time_point start) {
   const std::size_t ns = run.stations().size();
   const auto& removal = run.removal();
@@ -136,7 +136,7 @@ nlohmann::json removal_summary(const cases::Case& c, const MachiningRun& run, co
 
 }  // namespace
 
-nlohmann::json run_removal(const cases::Case& c, const std::filesystem::path& out, bool quiet) {
+nlohmann::json run_removal(const case_file::Case& c, const std::filesystem::path& out, bool quiet) {
   const auto start = std::chrono::steady_clock::now();
   const PartModel part = build_part(c);
   const auto& mesh = part.mesh;

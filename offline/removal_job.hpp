@@ -3,7 +3,7 @@
 // every element at every station (removal.h5), frames of the remaining part (removal.pvd), volumes per
 // station (volumes.csv), the removed region's surface (removed_surface.vtp), the program
 // (toolpath.nc) and summary.json, in `out`.
-#include "case/case.hpp"
+#include "case_file/case.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -12,6 +12,6 @@
 namespace drom::offline {
 
 // Returns the summary. Progress on stderr unless quiet.
-nlohmann::json run_removal(const cases::Case& c, const std::filesystem::path& out, bool quiet);
+nlohmann::json run_removal(const case_file::Case& c, const std::filesystem::path& out, bool quiet);
 
 }  // namespace drom::offline

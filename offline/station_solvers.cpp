@@ -114,7 +114,7 @@ class FeStation final : public StationSolver {
 
 class FeSolvers final : public StationSolvers {
  public:
-  FeSolvers(const cases::Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles, const std::vector<int>& clamped,
+  FeSolvers(const case_file::Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles, const std::vector<int>& clamped,
             const std::vector<int>& groups, std::string_view equilibrium)
       : part_(part),
         profiles_(profiles),
@@ -179,7 +179,7 @@ void add_reports(nlohmann::json& s, const std::vector<pgd::PgdReport>& reports) 
 
 class PgdStation final : public StationSolver {
  public:
-  PgdStation(const cases::Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles, const std::vector<int>& clamped,
+  PgdStation(const case_file::Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles, const std::vector<int>& clamped,
              const pgd::PgdProblem& base)
       : part_(part), problem_(base.grid(), part.material, profiles, pgd_settings(c), c.pgd_penalty, c.pgd_indicator_tolerance) {
     problem_.adopt_equilibrium(base);
@@ -237,7 +237,7 @@ class PgdStation final : public StationSolver {
 
 class PgdSolvers final : public StationSolvers {
  public:
-  PgdSolvers(const cases::Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles, const std::vector<int>& clamped)
+  PgdSolvers(const case_file::Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles, const std::vector<int>& clamped)
       : case_(c),
         part_(part),
         profiles_(profiles),
@@ -260,7 +260,7 @@ class PgdSolvers final : public StationSolvers {
   }
 
  private:
-  const cases::Case& case_;
+  const case_file::Case& case_;
   const PartModel& part_;
   std::vector<fem::StressProfile> profiles_;
   std::vector<int> clamped_;
@@ -284,7 +284,7 @@ void accumulate(nlohmann::json& total, const nlohmann::json& add) {
   }
 }
 
-std::unique_ptr<StationSolvers> StationSolvers::create(const cases::Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles,
+std::unique_ptr<StationSolvers> StationSolvers::create(const case_file::Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles,
                                                        const std::vector<int>& clamped, const std::vector<int>& groups, std::string_view equilibrium) {
   // The PGD solves every profile on its own already.
   if (c.solver == "pgd") return std::make_unique<PgdSolvers>(c, part, profiles, clamped);

@@ -50,7 +50,7 @@ class StationSolvers {
   // group alone gives (drom run computes the offline and truth databases in one pass).
   // `equilibrium`: what equilibrium() of another process's solvers for the same case gave (rank 0 of
   // an MPI job); adopted instead of equilibrating again when not empty.
-  static std::unique_ptr<StationSolvers> create(const cases::Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles,
+  static std::unique_ptr<StationSolvers> create(const case_file::Case& c, const PartModel& part, const std::vector<fem::StressProfile>& profiles,
                                                 const std::vector<int>& clamped, const std::vector<int>& groups = {},
                                                 std::string_view equilibrium = {});
   virtual std::unique_ptr<StationSolver> make_worker() const = 0;

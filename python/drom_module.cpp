@@ -2,12 +2,12 @@
 // predictor, and the closed loop's simulated machine, with numpy arrays in and out (docs/python.md).
 // Errors are drom.InputError (a ValueError) carrying the C++ message: file, line, key. Long calls
 // release the GIL; the offline job's progress callback takes it back to run.
-#include "case/case.hpp"
+#include "case_file/case.hpp"
 #include "loop/closed_loop_run.hpp"
 #include "loop/closed_loop_study.hpp"
 #include "loop/closed_loop_setup.hpp"
 #include "offline/offline_job.hpp"
-#include "online/closed_loop.hpp"
+#include "online/loop_simulation.hpp"
 #include "online/predictor.hpp"
 #include "reduce/database_reduction.hpp"
 #include "reduce/light_model.hpp"
@@ -66,7 +66,7 @@ py::dict job_dict(const offline::JobResult& r) {
   return d;
 }
 
-offline::JobResult run_job(const cases::Case& c, offline::JobKind kind, const std::filesystem::path& out, bool resume, int stop_after, int threads,
+offline::JobResult run_job(const case_file::Case& c, offline::JobKind kind, const std::filesystem::path& out, bool resume, int stop_after, int threads,
                            int frames, bool quiet, const std::function<bool(std::size_t, std::size_t)>& progress) {
   offline::JobOptions o;
   o.out = out, o.resume = resume, o.stop_after = stop_after, o.threads = threads, o.frames = frames, o.quiet = quiet;
@@ -96,29 +96,29 @@ PYBIND11_MODULE(drom, m) {
   bind_machine(m);
 
   // ---- cases -------------------------------------------------------------------------------
-  py::class_<cases::Case>(m, "Case", "A case file read and validated (case/case.hpp); every key as in docs/case-files.md")
-      .def_readonly("name", &cases::Case::name)
-      .def_readonly("description", &cases::Case::description)
-      .def_readonly("origin", &cases::Case::origin)
-      .def_readonly("resolved_toml", &cases::Case::resolved_toml, "the case after its overrides, as TOML")
-      .def_readonly("solver", &cases::Case::solver)
-      .def_readonly("shape", &cases::Case::shape)
-      .def_readonly("element", &cases::Case::element)
-      .def_readonly("nx", &cases::Case::nx)
-      .def_readonly("ny", &cases::Case::ny)
-      .def_readonly("nz", &cases::Case::nz)
-      .def_readonly("pocket_depth", &cases::Case::pocket_depth)
-      .def_readonly("sigma11", &cases::Case::sigma11)
-      .def_readonly("sigma22", &cases::Case::sigma22)
-      .def_readonly("sensor_noise", &cases::Case::sensor_noise)
-      .def_readonly("path_tolerance", &cases::Case::path_tolerance)
-      .def_readonly("shape_tolerance", &cases::Case::shape_tolerance)
-      .def_readonly("shape_pass", &cases::Case::shape_pass)
-      .def_readonly("run_scale", &cases::Case::run_scale)
-      .def("__repr__", fields<cases::Case>({"name", "origin", "shape", "element", "solver", "nx", "ny", "nz", "run_scale"}));
-  m.def("load_case", &cases::load_case, py::arg("path") = std::nullopt, py::arg("overrides") = std::vector<std::string>{},
+  py::class_<case_file::Case>(m, "Case", "A case file read and validated (case_file/case.hpp); every key as in docs/case-files.md")
+      .def_readonly("name", &case_file::Case::name)
+      .def_readonly("description", &case_file::Case::description)
+      .def_readonly("origin", &case_file::Case::origin)
+      .def_readonly("resolved_toml", &case_file::Case::resolved_toml, "the case after its overrides, as TOML")
+      .def_readonly("solver", &case_file::Case::solver)
+      .def_readonly("shape", &case_file::Case::shape)
+      .def_readonly("element", &case_file::Case::element)
+      .def_readonly("nx", &case_file::Case::nx)
+      .def_readonly("ny", &case_file::Case::ny)
+      .def_readonly("nz", &case_file::Case::nz)
+      .def_readonly("pocket_depth", &case_file::Case::pocket_depth)
+      .def_readonly("sigma11", &case_file::Case::sigma11)
+      .def_readonly("sigma22", &case_file::Case::sigma22)
+      .def_readonly("sensor_noise", &case_file::Case::sensor_noise)
+      .def_readonly("path_tolerance", &case_file::Case::path_tolerance)
+      .def_readonly("shape_tolerance", &case_file::Case::shape_tolerance)
+      .def_readonly("shape_pass", &case_file::Case::shape_pass)
+      .def_readonly("run_scale", &case_file::Case::run_scale)
+      .def("__repr__", fields<case_file::Case>({"name", "origin", "shape", "element", "solver", "nx", "ny", "nz", "run_scale"}));
+  m.def("load_case", &case_file::load_case, py::arg("path") = std::nullopt, py::arg("overrides") = std::vector<std::string>{},
         "A case file (or, without one, the embedded flat plate) with 'key=value' overrides as --set gives them; raises InputError");
-  m.def("case_from_text", &cases::case_from_text, py::arg("text"), py::arg("origin") = "<text>", py::arg("overrides") = std::vector<std::string>{});
+  m.def("case_from_text", &case_file::case_from_text, py::arg("text"), py::arg("origin") = "<text>", py::arg("overrides") = std::vector<std::string>{});
   m.def("load_run_case", &loop::load_run_case, py::arg("path") = std::nullopt, py::arg("overrides") = std::vector<std::string>{},
         "The case as drom run runs it: [run] quick's overrides first when its scale is 'quick'");
 
@@ -128,7 +128,7 @@ PYBIND11_MODULE(drom, m) {
       "station; returning False stops the job (resume later). The GIL is released while it runs.";
   m.def(
       "run_offline",
-      [](const cases::Case& c, const std::filesystem::path& out, bool resume, int stop_after, int threads, int frames, bool quiet,
+      [](const case_file::Case& c, const std::filesystem::path& out, bool resume, int stop_after, int threads, int frames, bool quiet,
          const std::function<bool(std::size_t, std::size_t)>& progress) {
         return job_dict(run_job(c, offline::JobKind::Offline, out, resume, stop_after, threads, frames, quiet, progress));
       },
@@ -136,7 +136,7 @@ PYBIND11_MODULE(drom, m) {
       py::arg("quiet") = true, py::arg("progress") = nullptr, job_doc);
   m.def(
       "run_truth",
-      [](const cases::Case& c, const std::filesystem::path& out, bool resume, int stop_after, int threads, int frames, bool quiet,
+      [](const case_file::Case& c, const std::filesystem::path& out, bool resume, int stop_after, int threads, int frames, bool quiet,
          const std::function<bool(std::size_t, std::size_t)>& progress) {
         return job_dict(run_job(c, offline::JobKind::Truth, out, resume, stop_after, threads, frames, quiet, progress));
       },
@@ -271,7 +271,7 @@ PYBIND11_MODULE(drom, m) {
       .def("__repr__", fields<loop::ClosedLoopInputs>({"model", "truth_final_displacement"}));
   m.def(
       "prepare_closed_loop",
-      [](const cases::Case& c, const std::filesystem::path& out, bool quiet, int threads) {
+      [](const case_file::Case& c, const std::filesystem::path& out, bool quiet, int threads) {
         py::gil_scoped_release free;
         return std::make_shared<loop::ClosedLoopInputs>(loop::prepare_closed_loop(c, {out, quiet, threads}));
       },
@@ -280,7 +280,7 @@ PYBIND11_MODULE(drom, m) {
   m.def("predictor_settings", &loop::predictor_settings, py::arg("case"), py::arg("model"), "The predictor's settings as drom run takes them from the case");
   m.def(
       "run_closed_loop",
-      [](const cases::Case& c, const std::filesystem::path& out, bool quiet, int threads) {
+      [](const case_file::Case& c, const std::filesystem::path& out, bool quiet, int threads) {
         nlohmann::json summary;
         {
           py::gil_scoped_release free;
@@ -292,7 +292,7 @@ PYBIND11_MODULE(drom, m) {
 
   m.def(
       "run_study",
-      [](const cases::Case& base, const std::string& parameter, const std::vector<double>& values, const std::filesystem::path& out, bool quiet, int threads) {
+      [](const case_file::Case& base, const std::string& parameter, const std::vector<double>& values, const std::filesystem::path& out, bool quiet, int threads) {
         nlohmann::json summary;
         {
           py::gil_scoped_release free;
@@ -321,9 +321,9 @@ PYBIND11_MODULE(drom, m) {
       .def("__repr__", fields<online::LoopMachine::Step>({"index", "clock", "true_time", "believed_time", "tip", "pass_", "on_target", "refresh",
                                                           "setpoint_time", "scan"}));
   py::class_<Machine>(m, "LoopMachine",
-                      "drom run's simulated machine, part and laser sheet (online/closed_loop.hpp), for a controller of one's own: step it, command "
+                      "drom run's simulated machine, part and laser sheet (online/loop_simulation.hpp), for a controller of one's own: step it, command "
                       "offsets when a refresh is due, read a profile when a scan is due")
-      .def(py::init([](const std::shared_ptr<loop::ClosedLoopInputs>& in, const cases::Case& c) {
+      .def(py::init([](const std::shared_ptr<loop::ClosedLoopInputs>& in, const case_file::Case& c) {
              auto made = std::make_unique<Machine>();
              made->truth = in->play();
              made->machine = std::make_unique<online::LoopMachine>(in->model, made->truth.part, loop::loop_settings(c, in->model));

@@ -1,5 +1,5 @@
 // drom check, drom mesh, drom layer, drom removal: what a case describes, built and inspected
-// (case/case.hpp, offline/mesh_output.hpp, offline/layer_check.hpp, offline/removal_job.hpp).
+// (case_file/case.hpp, offline/mesh_output.hpp, offline/layer_check.hpp, offline/removal_job.hpp).
 #include "apps/commands.hpp"
 #include "offline/layer_check.hpp"
 #include "offline/mesh_output.hpp"
@@ -11,13 +11,13 @@
 namespace drom::app {
 
 int check_command(const CommandOptions& options) {
-  const cases::Case c = cases::load_case(options.case_path, options.overrides);
+  const case_file::Case c = case_file::load_case(options.case_path, options.overrides);
   std::cout << "# " << c.origin << ": valid case '" << c.name << "'; resolved values follow\n" << c.resolved_toml << "\n";
   return 0;
 }
 
 int mesh_command(const CommandOptions& options) {
-  const cases::Case c = cases::load_case(options.case_path, options.overrides);
+  const case_file::Case c = case_file::load_case(options.case_path, options.overrides);
   const auto s = offline::write_mesh(c, options.out);
   if (!options.quiet)
     std::printf("%s: %d %s elements, %d unknowns, %zu clamped dofs -> %s\n", c.name.c_str(), s["elements"].get<int>(), s["element"].get<std::string>().c_str(),
@@ -26,7 +26,7 @@ int mesh_command(const CommandOptions& options) {
 }
 
 int layer_command(const CommandOptions& options) {
-  const cases::Case c = cases::load_case(options.case_path, options.overrides);
+  const case_file::Case c = case_file::load_case(options.case_path, options.overrides);
   const auto s = offline::run_layer_check(c, options.out, options.quiet);
   if (options.quiet) return 0;
   std::printf("drom layer: %s (%d %s elements, %d unknowns)\n", c.name.c_str(), s["mesh"]["elements"].get<int>(), s["mesh"]["element"].get<std::string>().c_str(),
@@ -45,7 +45,7 @@ int layer_command(const CommandOptions& options) {
 }
 
 int removal_command(const CommandOptions& options) {
-  const cases::Case c = cases::load_case(options.case_path, options.overrides);
+  const case_file::Case c = case_file::load_case(options.case_path, options.overrides);
   const auto s = offline::run_removal(c, options.out, options.quiet);
   if (!options.quiet)
     std::printf("drom removal: %s: %zu stations, removed %.1f mm^3 (level set; OpenVDB measure %.1f), %.1f mm^3 on the mesh; %.1f s -> %s\n", c.name.c_str(),

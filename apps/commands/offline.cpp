@@ -15,7 +15,7 @@ namespace {
 int export_ccx(const CommandOptions& options, offline::JobKind kind) {
   if (options.resume || !options.stations.empty() || options.stop_after >= 0)
     throw InputError("--export-ccx writes one station's deck: it does not combine with --resume, --stations or --stop-after");
-  const auto c = cases::load_case(options.case_path, options.overrides);
+  const auto c = case_file::load_case(options.case_path, options.overrides);
   const auto e = offline::export_calculix_station(c, kind, static_cast<std::size_t>(options.export_ccx), options.out);
   if (!options.quiet)
     std::printf("drom %s: %s: station %zu of %zu as a CalculiX deck: %d nodes, %d C3D20, %d removed, %d partly machined, %d fixed dofs (%.1f MB) -> %s\n"
@@ -29,9 +29,9 @@ int export_ccx(const CommandOptions& options, offline::JobKind kind) {
 int job(const CommandOptions& options, offline::JobKind kind, bool merge) {
   if (options.export_ccx >= 0) return export_ccx(options, kind);
   const auto team = offline::join_launched_team();
-  cases::Case c;
+  case_file::Case c;
   // Every rank reads the case; a bad one stops them all with the same message.
-  offline::on_every_rank(*team, [&] { c = cases::load_case(options.case_path, options.overrides); });
+  offline::on_every_rank(*team, [&] { c = case_file::load_case(options.case_path, options.overrides); });
   offline::JobOptions o;
   o.out = options.out;
   o.resume = options.resume;

@@ -20,7 +20,7 @@ loop::RunOptions run_options(const CommandOptions& options) {
 int run_command(const CommandOptions& options) {
   // Under mpirun, every rank shares the offline-and-truth pass; rank 0 alone runs the rest.
   const auto team = offline::join_launched_team();
-  cases::Case c;
+  case_file::Case c;
   offline::on_every_rank(*team, [&] { c = loop::load_run_case(options.case_path, options.overrides); });
   loop::RunOptions run = run_options(options);
   run.team = team.get();
@@ -56,7 +56,7 @@ int run_command(const CommandOptions& options) {
 }
 
 int study_command(const CommandOptions& options) {
-  const cases::Case base = loop::load_run_case(options.case_path, options.overrides);
+  const case_file::Case base = loop::load_run_case(options.case_path, options.overrides);
   const auto summary = loop::run_study(base, options.study_parameter, options.study_values, run_options(options));
   if (options.quiet) return 0;
   std::printf("drom study: %s, %s\n", base.name.c_str(), summary["parameter_label"].get<std::string>().c_str());

@@ -38,7 +38,7 @@ struct Compared {
 };
 
 Compared compare(const std::string& case_file, const std::vector<std::string>& overrides, std::size_t station, const std::string& name) {
-  const auto c = drom::cases::load_case(std::string(DROM_SOURCE_DIR) + "/cases/" + case_file, overrides);
+  const auto c = drom::case_file::load_case(std::string(DROM_SOURCE_DIR) + "/cases/" + case_file, overrides);
   const auto out = dir(name);
   auto exported = drom::offline::export_calculix_station(c, drom::offline::JobKind::Offline, station, out);
   const auto ccx = drom::fem::run_calculix(exported.deck, exported.deck_stats.nodes);

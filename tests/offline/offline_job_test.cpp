@@ -272,7 +272,7 @@ TEST(Offline, OnePassForBothDatabasesWritesWhatTwoPassesWrite) {
   // database misses, and both come out the same again.
   drom::offline::JobOptions off, tru;
   off.quiet = tru.quiet = true;
-  const auto off_case = drom::cases::load_case(loop / "offline" / "case.toml", {}), tru_case = drom::cases::load_case(loop / "truth" / "case.toml", {});
+  const auto off_case = drom::case_file::load_case(loop / "offline" / "case.toml", {}), tru_case = drom::case_file::load_case(loop / "truth" / "case.toml", {});
   off.out = dir("one_pass_parts_offline");
   tru.out = dir("one_pass_parts_truth");
   off.stop_after = 5;

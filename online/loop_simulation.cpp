@@ -1,4 +1,4 @@
-#include "online/closed_loop.hpp"
+#include "online/loop_simulation.hpp"
 
 #include "online/dead_reckoning.hpp"
 
@@ -37,7 +37,7 @@ void SyncError::add(double time_error, double shift) {
 
 void SyncError::finish() { rms_shift = samples > 0 ? std::sqrt(rms_shift / static_cast<double>(samples)) : 0.0; }
 
-ClosedLoop::ClosedLoop(const reduce::LightModel& model, PredictorSettings predictor, ClosedLoopSettings settings)
+LoopSimulation::LoopSimulation(const reduce::LightModel& model, PredictorSettings predictor, LoopSimulationSettings settings)
     : model_(model), predictor_settings_(predictor), settings_(std::move(settings)), passes_(floor_passes(model)) {
   if (!(settings_.period > 0) || !(settings_.refresh_rate > 0) || !(settings_.feed_override > 0) || !(settings_.desync >= 0))
     throw std::invalid_argument("closed loop: period, refresh rate and feed override must be > 0, desync >= 0");
@@ -71,7 +71,7 @@ std::optional<double> true_height(const TruePart& truth, const reduce::SurfaceMe
   return *top + (p ? truth.target->at(*p, t) : 0.0);
 }
 
-LoopMachine::LoopMachine(const reduce::LightModel& model, const TruePart& truth, ClosedLoopSettings settings)
+LoopMachine::LoopMachine(const reduce::LightModel& model, const TruePart& truth, LoopSimulationSettings settings)
     : model_(model), truth_(truth), settings_(std::move(settings)), passes_(floor_passes(model)), rng_(settings_.seed) {
   if (!(settings_.period > 0) || !(settings_.refresh_rate > 0) || !(settings_.feed_override > 0) || !(settings_.desync >= 0))
     throw std::invalid_argument("closed loop: period, refresh rate and feed override must be > 0, desync >= 0");
@@ -206,8 +206,8 @@ CalibrationBias LoopMachine::calibration() const {
 namespace {
 
 // One figure record per pass, before any step.
-ClosedLoopResult result_per_pass(const std::vector<Pass>& passes) {
-  ClosedLoopResult result;
+LoopSimulationResult result_per_pass(const std::vector<Pass>& passes) {
+  LoopSimulationResult result;
   result.passes.resize(passes.size());
   for (std::size_t p = 0; p < passes.size(); ++p) {
     result.passes[p].pass = static_cast<int>(p) + 1;
@@ -218,7 +218,7 @@ ClosedLoopResult result_per_pass(const std::vector<Pass>& passes) {
 }
 
 // 1. The cut, and its error against the target where it truly is; where the synchronizer thinks it is.
-void record_cut(const LoopMachine::Step& step, const Eigen::MatrixXd& path, const Predictor& predictor, ClosedLoopResult& result) {
+void record_cut(const LoopMachine::Step& step, const Eigen::MatrixXd& path, const Predictor& predictor, LoopSimulationResult& result) {
   if (step.pass > 0) {
     result.sync.add(step.believed_time - step.true_time, (step.believed_tip - step.tip).norm());
     result.sync_programmed_feed.add(step.programmed_feed_time - step.true_time, (path_position(path, step.programmed_feed_time) - step.tip).norm());
@@ -237,7 +237,7 @@ void record_cut(const LoopMachine::Step& step, const Eigen::MatrixXd& path, cons
 }
 
 // 2. A new setpoint, for the middle of the interval it will hold (0 when the loop does not correct).
-void command_setpoint(const LoopMachine::Step& step, bool correct, LoopMachine& machine, Predictor& predictor, ClosedLoopResult& result) {
+void command_setpoint(const LoopMachine::Step& step, bool correct, LoopMachine& machine, Predictor& predictor, LoopSimulationResult& result) {
   const double applied = correct ? predictor.tool_offset(step.setpoint_time) : 0.0;
   machine.command(applied);
   predictor.record_offset(step.believed_time, applied);
@@ -245,7 +245,7 @@ void command_setpoint(const LoopMachine::Step& step, bool correct, LoopMachine& 
 }
 
 // 3. A profile, read where the sheet truly is and handed to the predictor where it is believed to be.
-void take_profile(const LoopMachine::Step& step, LoopMachine& machine, Predictor& predictor, ClosedLoopResult& result) {
+void take_profile(const LoopMachine::Step& step, LoopMachine& machine, Predictor& predictor, LoopSimulationResult& result) {
   const auto points = machine.scan();
   ToolPose pose;
   pose.tip = step.believed_tip;
@@ -263,7 +263,7 @@ void take_profile(const LoopMachine::Step& step, LoopMachine& machine, Predictor
 }
 
 // 4. At pass `pass`'s end (0-based): the final shape predicted now, against the truth's.
-void compare_final_shape(std::size_t pass, const Predictor& predictor, const TruePart& truth, ClosedLoopResult& result) {
+void compare_final_shape(std::size_t pass, const Predictor& predictor, const TruePart& truth, LoopSimulationResult& result) {
   FinalShape shape = predictor.final_shape();
   result.estimates.push_back(predictor.estimate());
   auto& f = result.passes[pass];
@@ -277,7 +277,7 @@ void compare_final_shape(std::size_t pass, const Predictor& predictor, const Tru
 }
 
 // The run's totals, once the program has ended.
-void close_result(const LoopMachine& machine, const Predictor& predictor, ClosedLoopResult& result) {
+void close_result(const LoopMachine& machine, const Predictor& predictor, LoopSimulationResult& result) {
   result.calibration = machine.calibration();
   result.rejections = predictor.rejections();
   result.offset_bound = predictor.max_offset();
@@ -288,11 +288,11 @@ void close_result(const LoopMachine& machine, const Predictor& predictor, Closed
 
 }  // namespace
 
-ClosedLoopResult ClosedLoop::run(const TruePart& truth, const std::function<void(double)>& progress) const {
+LoopSimulationResult LoopSimulation::run(const TruePart& truth, const std::function<void(double)>& progress) const {
   const auto start = std::chrono::steady_clock::now();
   LoopMachine machine(model_, truth, settings_);
   Predictor predictor(model_, predictor_settings_);
-  ClosedLoopResult result = result_per_pass(passes_);
+  LoopSimulationResult result = result_per_pass(passes_);
   std::size_t next_shape = 0;
   const long steps = machine.steps();
   for (long k = 0; k <= steps; ++k) {

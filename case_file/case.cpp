@@ -1,12 +1,12 @@
-#include "case/case.hpp"
+#include "case_file/case.hpp"
 
 #include "support/toml_reader.hpp"
-#include "case/default_case.hpp"
+#include "case_file/default_case.hpp"
 #include "support/input_error.hpp"
 
 #include <cmath>
 
-namespace drom::cases {
+namespace drom::case_file {
 
 const char* embedded_default_case() { return kDefaultCaseToml; }
 
@@ -280,4 +280,4 @@ Case case_from_text(const std::string& text, const std::string& origin, const st
   return c;
 }
 
-}  // namespace drom::cases
+}  // namespace drom::case_file

@@ -1,11 +1,11 @@
-// The closed loop (online/closed_loop.hpp) on the synthetic model (tests/reduce/synthetic_model.hpp),
+// The closed loop (online/loop_simulation.hpp) on the synthetic model (tests/reduce/synthetic_model.hpp),
 // with a truth inside its basis so that what is left is the loop's own doing:
 //   - the simulated floor against an independent brute-force reading (tests/online/exact_reading.hpp);
 //   - the loop is closed: without correction the floor error is the truth's distortion, with it the
 //     error falls below the tolerance once learned (check 2 of the issue);
 //   - a sensor calibration error along the feed biases the measured surface by slope x offset
 //     (seed §2.3.2; check 3 of the issue).
-#include "online/closed_loop.hpp"
+#include "online/loop_simulation.hpp"
 #include "online/machined_floor.hpp"
 #include "tests/online/exact_reading.hpp"
 #include "tests/reduce/synthetic_model.hpp"
@@ -49,8 +49,8 @@ std::unique_ptr<Truth> truth_in_basis(const reduce::LightModel& m, const Eigen::
 
 const Eigen::VectorXd kAlpha = (Eigen::VectorXd(4) << 1.6, -1.2, 0.9, 0.7).finished();
 
-online::ClosedLoopSettings settings(bool correct, double noise) {
-  online::ClosedLoopSettings s;
+online::LoopSimulationSettings settings(bool correct, double noise) {
+  online::LoopSimulationSettings s;
   s.errors.noise_sd = noise;
   s.refresh_rate = 100;
   s.correct = correct;
@@ -106,7 +106,7 @@ TEST(MachinedFloor, MatchesABruteForceReadingWithOffsetsChangingUnderTheTool) {
 // The sheet on the stock's top: the truth's own top where its face stands whole; where the tool has
 // reached one of the face's nodes, those nodes' held values belong to removed material, and a point
 // still standing over the pocket reads the floor-level w below it.
-TEST(ClosedLoop, SheetReadsAPartlyCutTopFaceThroughTheFloorBelow) {
+TEST(LoopSimulation, SheetReadsAPartlyCutTopFaceThroughTheFloorBelow) {
   reduce::LightModel m = test::synthetic_model();
   test::add_synthetic_top(m);
   const auto truth = truth_in_basis(m, kAlpha);
@@ -147,12 +147,12 @@ TEST(ClosedLoop, SheetReadsAPartlyCutTopFaceThroughTheFloorBelow) {
   EXPECT_GT(checked_floor, 100);
 }
 
-TEST(ClosedLoop, WithoutCorrectionTheErrorIsTheDistortionWithItBelowToleranceOnceLearned) {
+TEST(LoopSimulation, WithoutCorrectionTheErrorIsTheDistortionWithItBelowToleranceOnceLearned) {
   const reduce::LightModel m = test::synthetic_model();
   const auto truth = truth_in_basis(m, kAlpha);
   const double noise = 0.002, tolerance = 1e-3;
-  const auto off = online::ClosedLoop(m, predictor(noise), settings(false, noise)).run(truth->part);
-  const auto on = online::ClosedLoop(m, predictor(noise), settings(true, noise)).run(truth->part);
+  const auto off = online::LoopSimulation(m, predictor(noise), settings(false, noise)).run(truth->part);
+  const auto on = online::LoopSimulation(m, predictor(noise), settings(true, noise)).run(truth->part);
   ASSERT_EQ(off.passes.size(), 5u);
   // Without correction the tool stays on the program: the error is minus the distortion under it.
   double worst_follow = 0, largest = 0;
@@ -181,12 +181,12 @@ TEST(ClosedLoop, WithoutCorrectionTheErrorIsTheDistortionWithItBelowToleranceOnc
   EXPECT_LT(on.passes.back().shape_max_error, 2e-3);
 }
 
-TEST(ClosedLoop, CalibrationOffsetAlongTheFeedBiasesTheSurfaceBySlopeTimesOffset) {
+TEST(LoopSimulation, CalibrationOffsetAlongTheFeedBiasesTheSurfaceBySlopeTimesOffset) {
   const reduce::LightModel m = test::synthetic_model();
   const auto truth = truth_in_basis(m, 4 * kAlpha);  // steeper, so the bias stands out
   auto s = settings(false, 0);
   s.errors.offset_error = Eigen::Vector3d(1.0, 0, 0);  // 1 mm along the feed
-  const auto r = online::ClosedLoop(m, predictor(0), s).run(truth->part);
+  const auto r = online::LoopSimulation(m, predictor(0), s).run(truth->part);
   std::printf("calibration: %lld points, rms bias %.2e mm, rms slope x offset %.2e mm, ratio %.3f\n", r.calibration.points, r.calibration.rms_bias,
               r.calibration.rms_slope_times_offset, r.calibration.ratio);
   EXPECT_GT(r.calibration.points, 1000);

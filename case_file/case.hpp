@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace drom::cases {
+namespace drom::case_file {
 
 struct ClampSpec {
   std::string face;                   // bottom, top, x_min, x_max, y_min, y_max (parametric faces)
@@ -137,4 +137,4 @@ Case case_from_text(const std::string& text, const std::string& origin, const st
 // The text of cases/flat_plate.toml, compiled in.
 const char* embedded_default_case();
 
-}  // namespace drom::cases
+}  // namespace drom::case_file

@@ -55,7 +55,7 @@ struct TruePart {
 std::optional<double> true_height(const TruePart& truth, const reduce::SurfaceMesh& target, const MachinedFloor& floor, double x, double y, double t, int& hint,
                                   int& top_hint);
 
-struct ClosedLoopSettings {
+struct LoopSimulationSettings {
   LaserSheet sheet;
   SensorErrors errors;
   double period = 0.1;         // s between profiles
@@ -124,7 +124,7 @@ struct CalibrationBias {
   double ratio = 0;  // least-squares slope of bias on slope x offset (1: the seed's rule holds)
 };
 
-struct ClosedLoopResult {
+struct LoopSimulationResult {
   std::vector<LoopSample> samples;
   std::vector<PassFigures> passes;
   std::vector<FinalShape> shapes;  // the prediction at each pass's end
@@ -147,12 +147,12 @@ struct ClosedLoopResult {
 // desync), the real part under the tool, the floor the tool cuts with the offsets commanded, and the
 // laser sheet on the spindle (its calibration errors and noise). A controller drives it: at each step
 // it commands an offset when a refresh falls due and takes the profile the sheet reads when a scan
-// does. ClosedLoop::run is that controller with a Predictor; the Python module drives the same
+// does. LoopSimulation::run is that controller with a Predictor; the Python module drives the same
 // machine with its own (so both give the same errors, bit for bit).
 class LoopMachine {
  public:
   // `truth` must outlive the machine.
-  LoopMachine(const reduce::LightModel& model, const TruePart& truth, ClosedLoopSettings settings);
+  LoopMachine(const reduce::LightModel& model, const TruePart& truth, LoopSimulationSettings settings);
 
   struct Step {
     long index = 0;
@@ -189,7 +189,7 @@ class LoopMachine {
  private:
   const reduce::LightModel& model_;
   const TruePart& truth_;
-  ClosedLoopSettings settings_;
+  LoopSimulationSettings settings_;
   std::vector<Pass> passes_;
   std::vector<int> sync_;
   std::unique_ptr<DeadReckoning> reckoning_, programmed_reckoning_;
@@ -206,17 +206,17 @@ class LoopMachine {
   long long calibration_points_ = 0;
 };
 
-class ClosedLoop {
+class LoopSimulation {
  public:
-  ClosedLoop(const reduce::LightModel& model, PredictorSettings predictor, ClosedLoopSettings settings);
-  ClosedLoopResult run(const TruePart& truth, const std::function<void(double fraction)>& progress = {}) const;
+  LoopSimulation(const reduce::LightModel& model, PredictorSettings predictor, LoopSimulationSettings settings);
+  LoopSimulationResult run(const TruePart& truth, const std::function<void(double fraction)>& progress = {}) const;
 
   const std::vector<Pass>& passes() const { return passes_; }
 
  private:
   const reduce::LightModel& model_;
   PredictorSettings predictor_settings_;
-  ClosedLoopSettings settings_;
+  LoopSimulationSettings settings_;
   std::vector<Pass> passes_;
 };
 

@@ -1,5 +1,5 @@
 // Case files: every bad input names its key (and line), every key can be overridden with --set.
-#include "case/case.hpp"
+#include "case_file/case.hpp"
 #include "offline/part_setup.hpp"
 #include "support/input_error.hpp"
 
@@ -9,7 +9,7 @@
 #include <fstream>
 
 using drom::InputError;
-using drom::cases::load_case;
+using drom::case_file::load_case;
 
 namespace {
 
@@ -62,7 +62,7 @@ TEST(CaseFile, OverridesReachEveryKindOfValue) {
 TEST(CaseFile, UnknownKeysAreRejectedByName) {
   EXPECT_NE(error_of({"mesh.nxx=3"}).find("mesh.nxx: unknown key"), std::string::npos);
   EXPECT_NE(error_of({"tool.colour='red'"}).find("tool.colour: unknown key"), std::string::npos);
-  const auto path = write_temp("typo.toml", std::string(drom::cases::embedded_default_case()) + "\n[material]\n");
+  const auto path = write_temp("typo.toml", std::string(drom::case_file::embedded_default_case()) + "\n[material]\n");
   // A duplicated table is a TOML error with its line.
   EXPECT_NE(error_of({}, path).find("typo.toml:"), std::string::npos);
   const auto typo = write_temp("typo2.toml", "name = 'x'\n[part]\nshape = 'plate'\nlenght_x = 3\n");
