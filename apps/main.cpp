@@ -38,9 +38,10 @@ void add_case_input(CLI::App& cmd, Arguments& a) {
   cmd.add_option("--set", a.options.overrides, "override a case value, e.g. --set mesh.nx=20 (repeatable)")->take_all();
 }
 
-// --out shows the folder it defaults to when the subcommand is registered.
+// --out's default is the subcommand's own (Subcommand::out), set after registration: one variable
+// serves every subcommand, so a default captured from it would be whichever was registered last.
 void add_output(CLI::App& cmd, Arguments& a, const std::string& out_help = "output folder") {
-  cmd.add_option("--out", a.options.out, out_help)->capture_default_str();
+  cmd.add_option("--out", a.options.out, out_help);
   cmd.add_flag("--quiet", a.options.quiet, "no progress or table, only files");
 }
 
@@ -112,7 +113,6 @@ void add_reduce(CLI::App& cmd, Arguments& a) {
   add_output(cmd, a, "model file (.h5), or a folder for model.h5");
 }
 
-// Its --out default (out/copy) stays the shared default for the subcommands registered after it.
 void add_copy(CLI::App& cmd, Arguments& a) {
   CommandOptions& o = a.options;
   cmd.add_option("cloud", a.case_path, "the scanned cloud: XYZ/CSV (x y z [nx ny nz]) or PLY (ascii or binary)")->required();
@@ -120,13 +120,14 @@ void add_copy(CLI::App& cmd, Arguments& a) {
   cmd.add_option("--tool", o.tool, "finishing tool: ball:D, torus:D:r or flat:D (mm); default: the settings' (ball:6)");
   cmd.add_option("--machine", o.copy_machine, "machine file (TOML) or shipped machine; default: the settings' (ucp710_like)");
   cmd.add_option("--set", o.overrides, "override a setting, e.g. --set packets.coverage=0.9 (repeatable)")->take_all();
-  o.out = "out/copy";
   add_output(cmd, a);
 }
 
 void add_finish(CLI::App& cmd, Arguments& a) {
   add_case_command(cmd, a);
   cmd.add_option("--threads", a.options.threads, "K values optimised at once (default: one per hardware thread)")->check(CLI::PositiveNumber);
+  cmd.add_flag("--resume", a.options.resume,
+               "take up a killed run's work in OUT.partial, or reuse the finished K values of the last complete run in OUT (default: start afresh)");
 }
 
 void add_orient(CLI::App& cmd, Arguments& a) {
@@ -147,12 +148,12 @@ void add_machine(CLI::App& cmd, Arguments& a) {
   cmd.add_option("--subroutine-path", o.subroutine_paths, "a folder rs274 searches for O<name> call (repeatable)")->take_all();
   cmd.add_option("--sample-period", o.sample_period, "seconds between rows of axes.csv (default: the interpolation cycle)")
       ->check(CLI::PositiveNumber);
-  o.out = "out/machine";
   add_output(cmd, a);
 }
 
 struct Subcommand {
   const char* name;
+  const char* out;  // its own default output folder
   const char* help;
   void (*add)(CLI::App&, Arguments&);
   int (*run)(const CommandOptions&);
@@ -160,28 +161,28 @@ struct Subcommand {
 
 // In the order `drom --help` lists them.
 const Subcommand kSubcommands[] = {
-    {"run", "the closed loop on a case (default: the embedded flat-plate case): offline, model, truth, corrected machining", add_run,
+    {"run", "out", "the closed loop on a case (default: the embedded flat-plate case): offline, model, truth, corrected machining", add_run,
      drom::app::run_command},
-    {"study", "sweep one closed-loop parameter (noise, angle, refresh, calibration, desync, amplitude, seed) and tabulate the headline errors",
+    {"study", "out/study", "sweep one closed-loop parameter (noise, angle, refresh, calibration, desync, amplitude, seed) and tabulate the headline errors",
      add_study, drom::app::study_command},
-    {"layer", "the FE core on uniform layer removal, against the closed form", add_case_command, drom::app::layer_command},
-    {"removal", "compute the material each tool station removes, on the case's mesh", add_case_command, drom::app::removal_command},
-    {"offline", "simulate the machining once per unit stress profile: the snapshot database (B1, B2)", add_job, drom::app::offline_command},
-    {"truth", "simulate the machining for the case's own stress profile, with full fields", add_job, drom::app::truth_command},
-    {"merge", "assemble database.h5 from the slices that drom offline / truth --stations a:b left in --out's checkpoint folder", add_merge,
+    {"layer", "out/layer", "the FE core on uniform layer removal, against the closed form", add_case_command, drom::app::layer_command},
+    {"removal", "out/removal", "compute the material each tool station removes, on the case's mesh", add_case_command, drom::app::removal_command},
+    {"offline", "out/offline", "simulate the machining once per unit stress profile: the snapshot database (B1, B2)", add_job, drom::app::offline_command},
+    {"truth", "out/truth", "simulate the machining for the case's own stress profile, with full fields", add_job, drom::app::truth_command},
+    {"merge", "out/offline", "assemble database.h5 from the slices that drom offline / truth --stations a:b left in --out's checkpoint folder", add_merge,
      drom::app::merge_command},
-    {"reduce", "compress an offline database into the light model the online predictor loads", add_reduce, drom::app::reduce_command},
-    {"deviation", "learn an unknown blank's deviation from laser profiles during the approach (seed chapter 2)", add_case_command,
+    {"reduce", "out/model", "compress an offline database into the light model the online predictor loads", add_reduce, drom::app::reduce_command},
+    {"deviation", "out/deviation", "learn an unknown blank's deviation from laser profiles during the approach (seed chapter 2)", add_case_command,
      drom::app::deviation_command},
-    {"copy", "copy a scanned part from its point cloud by 3+2 machining: normals, visibility, packets, roughing and finishing per packet, G-code",
+    {"copy", "out/copy", "copy a scanned part from its point cloud by 3+2 machining: normals, visibility, packets, roughing and finishing per packet, G-code",
      add_copy, drom::app::copy_command},
-    {"finish", "finishing paths on a free-form surface in the least time under a scallop bound (zoning, tool choice, 3-axis or 3+2)", add_finish,
+    {"finish", "out/finish", "finishing paths on a free-form surface in the least time under a scallop bound (zoning, tool choice, 3-axis or 3+2)", add_finish,
      drom::app::finish_command},
-    {"orient", "collision-free 5-axis tool axis along fixed CL paths from repulsive fields (seed 000), proved by a clearance check and put on a machine",
+    {"orient", "out/orient", "collision-free 5-axis tool axis along fixed CL paths from repulsive fields (seed 000), proved by a clearance check and put on a machine",
      add_orient, drom::app::orient_command},
-    {"mesh", "mesh the case's part and write it with its clamps to VTK", add_case_command, drom::app::mesh_command},
-    {"check", "validate a case file and print it with every override applied", add_case_command, drom::app::check_command},
-    {"machine", "a program (G-code or CL data) on a machine: travel, singularities, the feed it really reaches, the limiting axes, the cycle time",
+    {"mesh", "out/mesh", "mesh the case's part and write it with its clamps to VTK", add_case_command, drom::app::mesh_command},
+    {"check", "out/check", "validate a case file and print it with every override applied", add_case_command, drom::app::check_command},
+    {"machine", "out/machine", "a program (G-code or CL data) on a machine: travel, singularities, the feed it really reaches, the limiting axes, the cycle time",
      add_machine, drom::app::machine_command},
 };
 
@@ -205,9 +206,10 @@ std::optional<int> parse(CLI::App& app, int argc, char** argv) {
 }
 
 // Runs the subcommand given; its errors become the exit codes apps/README.md lists.
-int run_parsed(const Registered& commands, const CommandOptions& options) {
+int run_parsed(const Registered& commands, CommandOptions options) {
   for (const auto& [cmd, sub] : commands) {
     if (!cmd->parsed()) continue;
+    if (cmd->count("--out") == 0) options.out = sub->out;
     try {
       return sub->run(options);
     } catch (const drom::InputError& e) {
@@ -236,6 +238,7 @@ int main(int argc, char** argv) {
   for (const auto& sub : kSubcommands) {
     CLI::App* cmd = app.add_subcommand(sub.name, sub.help);
     sub.add(*cmd, args);
+    if (CLI::Option* out = cmd->get_option_no_throw("--out")) out->default_str(sub.out);
     commands.emplace_back(cmd, &sub);
   }
   if (const auto exit_code = parse(app, argc, argv)) return *exit_code;

@@ -94,13 +94,23 @@ void check_unit_normal(const std::string& origin, std::size_t where, bool binary
   out = n / length;
 }
 
+// A point with a coordinate or a normal component that is not a finite number (a scanner's "no
+// return"): an error when asked, else dropped and counted, the first one's place kept for the report.
+void drop_not_finite(PointCloud& cloud, const CloudReadOptions& options, const std::string& origin, std::size_t where, bool binary, const std::string& what) {
+  if (options.not_finite_is_error) {
+    if (binary) fail_at_byte(origin, where, what);
+    fail_at_line(origin, where, what);
+  }
+  if (cloud.dropped.not_finite++ == 0) cloud.dropped.first_not_finite = origin + (binary ? ": byte " : ": line ") + std::to_string(where) + ": " + what;
+}
+
 void require_points(const PointCloud& cloud, const std::string& origin) {
   if (cloud.points.empty()) throw InputError(origin + ": the cloud has no point");
 }
 
 }  // namespace
 
-PointCloud parse_xyz(std::string_view text, const std::string& origin) {
+PointCloud parse_xyz(std::string_view text, const std::string& origin, const CloudReadOptions& options) {
   PointCloud cloud;
   cloud.origin = origin;
   std::vector<std::string_view> tokens;
@@ -156,11 +166,17 @@ PointCloud parse_xyz(std::string_view text, const std::string& origin) {
     header_allowed = false;
     if (tokens.size() != columns)
       fail_at_line(origin, line_number, "expected " + std::to_string(columns) + " columns, as on the first line of data, found " + std::to_string(tokens.size()));
+    int not_finite = -1;
     for (const int k : {column_x, column_y, column_z, column_nx, column_ny, column_nz}) {
       if (k < 0) continue;
       const auto& v = values[static_cast<std::size_t>(k)];
       if (!v) fail_at_line(origin, line_number, "column " + std::to_string(k + 1) + ": expected a number, found " + shown(tokens[static_cast<std::size_t>(k)]));
-      if (!std::isfinite(*v)) fail_at_line(origin, line_number, "column " + std::to_string(k + 1) + ": " + shown(tokens[static_cast<std::size_t>(k)]) + " is not a finite number");
+      if (!std::isfinite(*v) && not_finite < 0) not_finite = k;
+    }
+    if (not_finite >= 0) {
+      drop_not_finite(cloud, options, origin, line_number, false,
+                      "column " + std::to_string(not_finite + 1) + ": " + shown(tokens[static_cast<std::size_t>(not_finite)]) + " is not a finite number");
+      continue;
     }
     cloud.points.emplace_back(*values[static_cast<std::size_t>(column_x)], *values[static_cast<std::size_t>(column_y)], *values[static_cast<std::size_t>(column_z)]);
     if (column_nx >= 0) {
@@ -276,7 +292,7 @@ double read_binary(const char* data, PlyType t, bool big_endian) {
 
 }  // namespace
 
-PointCloud parse_ply(std::string_view bytes, const std::string& origin) {
+PointCloud parse_ply(std::string_view bytes, const std::string& origin, const CloudReadOptions& options) {
   // The header: ASCII lines up to "end_header".
   if (!bytes.starts_with("ply\n") && !bytes.starts_with("ply\r\n")) throw InputError(origin + ": line 1: a PLY file starts with the line 'ply'");
   enum class Format { ascii, little, big } format = Format::ascii;
@@ -426,16 +442,31 @@ PointCloud parse_ply(std::string_view bytes, const std::string& origin) {
           fail_at_line(origin, line_number, "'" + element.name + "' " + std::to_string(i) + ": " + std::to_string(tokens.size() - t) + " values more than its properties declare");
         if (!is_vertex) continue;
         const Eigen::Vector3d p(values[static_cast<std::size_t>(px)], values[static_cast<std::size_t>(py)], values[static_cast<std::size_t>(pz)]);
-        if (!p.allFinite()) fail_at_line(origin, line_number, "vertex " + std::to_string(i) + " has a coordinate that is not a finite number");
+        const Eigen::Vector3d n = with_normals ? Eigen::Vector3d(values[static_cast<std::size_t>(pnx)], values[static_cast<std::size_t>(pny)], values[static_cast<std::size_t>(pnz)])
+                                               : Eigen::Vector3d::Zero();
+        if (!p.allFinite() || !n.allFinite()) {
+          drop_not_finite(cloud, options, origin, line_number, false, "vertex " + std::to_string(i) + (p.allFinite() ? " has a normal" : " has a coordinate") + " that is not a finite number");
+          continue;
+        }
         cloud.points.push_back(p);
         if (with_normals) {
           cloud.normals.emplace_back();
-          check_unit_normal(origin, line_number,
-                            false, Eigen::Vector3d(values[static_cast<std::size_t>(pnx)], values[static_cast<std::size_t>(pny)], values[static_cast<std::size_t>(pnz)]),
-                            cloud.normals.back());
+          check_unit_normal(origin, line_number, false, n, cloud.normals.back());
         }
       }
-      if (is_vertex) break;  // what follows the vertices is not needed
+    }
+    // Every element read: what follows is data the header does not declare (its vertex count is short).
+    while (position < bytes.size()) {
+      std::size_t end = bytes.find('\n', position);
+      if (end == std::string_view::npos) end = bytes.size();
+      const std::string_view line = bytes.substr(position, end - position);
+      position = end + 1;
+      ++line_number;
+      split_line(line, tokens);
+      if (!tokens.empty())
+        fail_at_line(origin, line_number,
+                     "data after the " + std::to_string(vertex->count) + " vertices" + (elements.size() > 1 ? " and the other elements" : std::string()) +
+                         " the header declares (line " + std::to_string(vertex->header_line) + "): the header's count is wrong, or two files were joined");
     }
   } else {
     const bool big = format == Format::big;
@@ -471,33 +502,44 @@ PointCloud parse_ply(std::string_view bytes, const std::string& origin) {
         if (!is_vertex) continue;
         const auto value = [&](int k) { return read_binary(bytes.data() + offsets[static_cast<std::size_t>(k)], element.properties[static_cast<std::size_t>(k)].type, big); };
         const Eigen::Vector3d p(value(px), value(py), value(pz));
-        if (!p.allFinite()) fail_at_byte(origin, record, "vertex " + std::to_string(i) + " has a coordinate that is not a finite number");
+        const Eigen::Vector3d n = with_normals ? Eigen::Vector3d(value(pnx), value(pny), value(pnz)) : Eigen::Vector3d::Zero();
+        if (!p.allFinite() || !n.allFinite()) {
+          drop_not_finite(cloud, options, origin, record, true, "vertex " + std::to_string(i) + (p.allFinite() ? " has a normal" : " has a coordinate") + " that is not a finite number");
+          continue;
+        }
         cloud.points.push_back(p);
         if (with_normals) {
           cloud.normals.emplace_back();
-          check_unit_normal(origin, record, true, Eigen::Vector3d(value(pnx), value(pny), value(pnz)), cloud.normals.back());
+          check_unit_normal(origin, record, true, n, cloud.normals.back());
         }
       }
-      if (is_vertex) break;
     }
+    // A newline after the data is common; anything more is data the header does not declare.
+    std::size_t trailing = position;
+    while (trailing < bytes.size() && (bytes[trailing] == '\n' || bytes[trailing] == '\r')) ++trailing;
+    if (trailing < bytes.size())
+      fail_at_byte(origin, position,
+                   std::to_string(bytes.size() - position) + " bytes after the " + std::to_string(vertex->count) + " vertices" +
+                       (elements.size() > 1 ? " and the other elements" : std::string()) + " the header declares (line " + std::to_string(vertex->header_line) +
+                       "): the header's count is wrong, or two files were joined");
   }
   require_points(cloud, origin);
   return cloud;
 }
 
-PointCloud parse_cloud(std::string_view bytes, const std::string& origin) {
-  if (bytes.starts_with("ply\n") || bytes.starts_with("ply\r\n")) return parse_ply(bytes, origin);
-  return parse_xyz(bytes, origin);
+PointCloud parse_cloud(std::string_view bytes, const std::string& origin, const CloudReadOptions& options) {
+  if (bytes.starts_with("ply\n") || bytes.starts_with("ply\r\n")) return parse_ply(bytes, origin, options);
+  return parse_xyz(bytes, origin, options);
 }
 
-PointCloud read_cloud(const std::filesystem::path& path, double scale) {
+PointCloud read_cloud(const std::filesystem::path& path, double scale, const CloudReadOptions& options) {
   if (!(scale > 0) || !std::isfinite(scale)) throw InputError(path.string() + ": the scale factor must be a positive number, not " + std::to_string(scale));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string() + ": cannot open the cloud file (missing or unreadable)");
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (in.bad()) throw InputError(path.string() + ": reading the cloud file failed");
   if (bytes.empty()) throw InputError(path.string() + ": the cloud file is empty");
-  PointCloud cloud = parse_cloud(bytes, path.string());
+  PointCloud cloud = parse_cloud(bytes, path.string(), options);
   if (scale != 1)
     for (auto& p : cloud.points) p *= scale;
   return cloud;

@@ -3,8 +3,10 @@
 // comma or semicolon between columns, so CSV too) and PLY (ascii, binary little- and big-endian).
 // Every entry point takes the bytes and the name of where they came from, so a fuzzer can call it
 // directly. Malformed input throws InputError naming the origin, the line (text) or the byte offset
-// (binary) and what was expected; it never crashes and never yields a silently wrong cloud: NaN or
-// infinite coordinates, missing x/y/z, truncated data and empty clouds are all errors.
+// (binary) and what was expected; it never crashes and never yields a silently wrong cloud: missing
+// x/y/z, truncated data, data beyond what a PLY header declares and empty clouds are all errors.
+// A point with a NaN or infinite coordinate or normal component (a scanner's "no return") is dropped
+// and counted in PointCloud::dropped, or is an error with CloudReadOptions::not_finite_is_error.
 //
 // XYZ/CSV: one point per line, '#' or '//' comment lines and blank lines skipped. An optional first
 // line names the columns (x, y, z required; nx, ny, nz together or not at all; others ignored).
@@ -21,13 +23,17 @@
 
 namespace drom::geometry {
 
-PointCloud parse_xyz(std::string_view text, const std::string& origin);
-PointCloud parse_ply(std::string_view bytes, const std::string& origin);
+struct CloudReadOptions {
+  bool not_finite_is_error = false;
+};
+
+PointCloud parse_xyz(std::string_view text, const std::string& origin, const CloudReadOptions& options = {});
+PointCloud parse_ply(std::string_view bytes, const std::string& origin, const CloudReadOptions& options = {});
 // PLY when the bytes start with "ply", XYZ text otherwise.
-PointCloud parse_cloud(std::string_view bytes, const std::string& origin);
+PointCloud parse_cloud(std::string_view bytes, const std::string& origin, const CloudReadOptions& options = {});
 
 // A file by its content (see parse_cloud); every coordinate multiplied by `scale` (the seed scaled its
 // clouds by 7/20 and 1/3). Throws InputError when the file is missing or unreadable.
-PointCloud read_cloud(const std::filesystem::path& path, double scale = 1);
+PointCloud read_cloud(const std::filesystem::path& path, double scale = 1, const CloudReadOptions& options = {});
 
 }  // namespace drom::geometry

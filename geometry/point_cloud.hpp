@@ -11,8 +11,16 @@
 
 namespace drom::geometry {
 
+// Points a reader or a cleaning step left out, counted for the run's report.
+struct DroppedPoints {
+  std::size_t not_finite = 0;     // a NaN or infinite coordinate or normal component
+  std::string first_not_finite;   // where the first one was: "file: line N: ..." or "file: byte N: ..."
+  std::size_t far_outliers = 0;   // geometry/cloud_outliers.hpp
+};
+
 struct PointCloud {
   std::string origin;                    // the file it came from, or what made it (for messages)
+  DroppedPoints dropped;
   std::vector<Eigen::Vector3d> points;   // mm
   std::vector<Eigen::Vector3d> normals;  // empty, or one unit normal per point (outward: out of the material)
   std::size_t size() const { return points.size(); }

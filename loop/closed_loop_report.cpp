@@ -52,7 +52,7 @@ Headline headline(const online::LoopSimulationResult& corrected, const online::L
 }
 
 std::string corrected_gcode(const reduce::LightModel& model, const std::vector<online::Pass>& passes, const std::vector<online::OffsetCommand>& offsets,
-                            const std::string& title) {
+                            const machine::PostOptions& post) {
   // The offset in force at program time t (a step function of the commanded offsets).
   auto offset_at = [&](double t) {
     const auto it = std::upper_bound(offsets.begin(), offsets.end(), t, [](double v, const online::OffsetCommand& o) { return v < o.believed_time; });
@@ -61,11 +61,16 @@ std::string corrected_gcode(const reduce::LightModel& model, const std::vector<o
   auto on_floor = [&](double t) {
     return std::any_of(passes.begin(), passes.end(), [&](const online::Pass& p) { return t >= p.start && t <= p.end; });
   };
-  std::string g = "(" + title + ")\n(drom corrected program: the tool-length compensation the predictor commanded, written into Z)\n"
-                  "(feeds reproduce the programmed timing; units mm, absolute)\nG21 G90 G17\n";
+  std::string g = machine::program_header(post, "", "G43 H" + std::to_string(post.tool),
+                                         "(drom corrected program: the tool-length compensation the predictor commanded, written into Z)\n"
+                                         "(feeds reproduce the programmed timing; units mm, absolute)\n");
   char line[160];
   const Eigen::MatrixXd& path = model.path;
-  std::snprintf(line, sizeof line, "G0 X%.4f Y%.4f Z%.4f\n", path(0, 0), path(0, 1), path(0, 2));
+  const double plane = path.col(2).maxCoeff() + post.clearance;
+  double entry_feed = 0;  // the path's first feed, for the plunge to its start
+  for (Eigen::Index i = 0; i + 1 < path.rows() && !(entry_feed > 0); ++i)
+    if (path(i + 1, 3) > path(i, 3)) entry_feed = 60 * (path.row(i + 1).head<3>() - path.row(i).head<3>()).norm() / (path(i + 1, 3) - path(i, 3));
+  std::snprintf(line, sizeof line, "G0 Z%.4f\nG0 X%.4f Y%.4f\nG1 Z%.4f F%.1f\n", plane, path(0, 0), path(0, 1), path(0, 2), entry_feed > 0 ? entry_feed : 500.0);
   g += line;
   double last_z = path(0, 2);
   for (Eigen::Index i = 0; i + 1 < path.rows(); ++i) {
@@ -93,7 +98,9 @@ std::string corrected_gcode(const reduce::LightModel& model, const std::vector<o
       last_z = z, prev = p, from = t;
     }
   }
-  g += "M30\n";
+  std::snprintf(line, sizeof line, "G0 Z%.4f\n", plane);
+  g += line;
+  g += machine::program_end(post);
   return g;
 }
 
@@ -211,7 +218,8 @@ std::vector<std::string> write_loop_outputs(const std::filesystem::path& out, co
   write_path_samples(out, corrected, uncorrected, files);
   write_offset_stream(out, corrected, files);
   write_final_shape_frames(out, c, truth, corrected, files);
-  write_file_atomically(out / "corrected_program.nc", corrected_gcode(model, online::floor_passes(model), corrected.offsets, c.name));
+  const machine::PostOptions post{.title = c.name, .tool_diameter = 2 * c.tool_radius};
+  write_file_atomically(out / "corrected_program.nc", corrected_gcode(model, online::floor_passes(model), corrected.offsets, post));
   files.push_back("corrected_program.nc");
   return files;
 }

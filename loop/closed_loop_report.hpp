@@ -3,6 +3,7 @@
 // the offset stream, the corrected program, and the headline figures both drom run and drom study
 // report.
 #include "case_file/case.hpp"
+#include "machine/post_processor.hpp"
 #include "online/loop_simulation.hpp"
 
 #include <nlohmann/json.hpp>
@@ -30,8 +31,11 @@ Headline headline(const online::LoopSimulationResult& corrected, const online::L
 std::vector<std::string> write_loop_outputs(const std::filesystem::path& out, const case_file::Case& c, const reduce::LightModel& model, const online::TruePart& truth,
                                             const online::LoopSimulationResult& corrected, const online::LoopSimulationResult& uncorrected);
 
-// The corrected program: the model's path with the commanded offsets written into Z on the floor.
+// The corrected program: the model's path with the commanded offsets written into Z on the floor,
+// in the shape every posted program has (machine/post_processor.hpp): the header with the tool and
+// the spindle, a retract to the clearance plane (the path's highest point + post.clearance) before
+// the first X Y move, a plunge to the path's start at its first feed, and M5 M30 at the end.
 std::string corrected_gcode(const reduce::LightModel& model, const std::vector<online::Pass>& passes, const std::vector<online::OffsetCommand>& offsets,
-                            const std::string& title);
+                            const machine::PostOptions& post);
 
 }  // namespace drom::loop

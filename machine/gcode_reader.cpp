@@ -77,10 +77,14 @@ NcProgram parse_plain_gcode(const std::string& text, const std::string& origin) 
   Modal modal;
   ProgramAxes position = ProgramAxes::Zero();
   bool stop_pending = false;
+  // How the program ends, as LinuxCNC's interpreter reads it: at M2 or M30 (what follows is never
+  // read), or, when its first line is '%', at the next '%'. A file that just stops is a transfer cut
+  // short, and the interpreter refuses it.
+  bool opened_with_percent = false, ended = false, anything_before = false;
   std::istringstream in(text);
   std::string raw;
   int line_no = 0;
-  while (std::getline(in, raw)) {
+  while (!ended && std::getline(in, raw)) {
     ++line_no;
     const std::string where = origin + ":" + std::to_string(line_no) + ": ";
     auto outside = [&](const std::string& what) { throw OutsidePlainSubset(where + what + " is outside drom's plain G-code subset"); };
@@ -99,12 +103,24 @@ NcProgram parse_plain_gcode(const std::string& text, const std::string& origin) 
       }
     }
     if (depth != 0) throw InputError(where + "unclosed comment '('");
+    const auto first = line.find_first_not_of(" \t\r"), last = line.find_last_not_of(" \t\r");
+    if (first != std::string::npos && line.substr(first, last - first + 1) == "%") {
+      if (opened_with_percent) {  // the closing '%'
+        ended = true;
+        break;
+      }
+      if (anything_before) throw InputError(where + "'%' stands only on a program's first line and on its closing line");
+      opened_with_percent = true;
+      continue;
+    }
+    anything_before = anything_before || first != std::string::npos;
     std::map<char, double> words;
     std::vector<int> g_codes, m_codes;
     std::size_t i = 0;
     while (i < line.size()) {
       const char c = static_cast<char>(std::toupper(static_cast<unsigned char>(line[i])));
-      if (std::isspace(static_cast<unsigned char>(c)) || c == '%' || c == '\r') {
+      if (c == '%') throw InputError(where + "'%' among a block's words: it stands alone, on a program's first line and on its closing line");
+      if (std::isspace(static_cast<unsigned char>(c)) || c == '\r') {
         ++i;
         continue;
       }
@@ -182,7 +198,8 @@ NcProgram parse_plain_gcode(const std::string& text, const std::string& origin) 
     }
     for (int m : m_codes) {
       switch (m) {
-        case 0: case 1: case 2: case 30: case 6: stop_pending = true; break;  // the NC stops: program stop/end, tool change
+        case 2: case 30: ended = true; stop_pending = true; break;            // the program's end: nothing after it is read
+        case 0: case 1: case 6: stop_pending = true; break;                   // the NC stops: program stop, tool change
         case 3: case 4: case 5: case 7: case 8: case 9: break;
         default: outside("M" + std::to_string(m));
       }
@@ -285,6 +302,12 @@ NcProgram parse_plain_gcode(const std::string& text, const std::string& origin) 
     }
     program.moves.push_back(move);
     position = target;
+  }
+  if (line_no == 0) throw InputError(origin + ": the file is empty, not a program");
+  if (!ended) {
+    const std::string where = origin + ":" + std::to_string(line_no) + ": ";
+    if (opened_with_percent) throw InputError(where + "the file ends with no closing '%' (it opened with '%'): a transfer cut short? LinuxCNC refuses it too");
+    throw InputError(where + "the program has no end (no M2 or M30, and no '%' around it): a transfer cut short? LinuxCNC refuses it too");
   }
   settle_program_start(program);
   return program;

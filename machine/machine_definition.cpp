@@ -129,6 +129,11 @@ Machine parse_machine(const std::string& text, const std::string& origin, const 
   else if (r.has("head.pivot_length")) r.fail("head.pivot_length", std::string("a ") + chain + " machine has no head pivot");
   m.tool_length = r.real("setup.tool_length", Range::positive(), 100);
   m.part_origin = vector3(r, "setup.part_origin", Eigen::Vector3d::Zero());
+  const AxisLimits& z = m.axes[2];
+  const double highest = head ? z.max : z.max - m.tool_length;  // Z's stroke bounds the gauge line on tip-controlled chains
+  const double lowest = head ? z.min : z.min - m.tool_length;
+  // A tool too long for the stroke is refused where it is mounted (its message names the stroke).
+  m.safe_z = highest > lowest ? r.real("setup.safe_z", Range::closed(lowest, highest), std::max(lowest, highest - 1)) : highest;
   r.finish();
   return m;
 }

@@ -64,6 +64,10 @@ struct Machine {
   // Set-up of the job (overridable with --set setup.tool_length=...).
   double tool_length = 100;                  // mm: gauge line to tool tip
   Eigen::Vector3d part_origin = Eigen::Vector3d::Zero();  // mm, program frame
+  // The program Z the spindle retracts to before any other motion and before a rotary axis turns
+  // (setup.safe_z): the tool tip's on tip-controlled chains, the pivot's on head chains. Default: the
+  // top of the Z stroke less 1 mm.
+  double safe_z = 0;
 
   int joint_count() const { return static_cast<int>(axes.size()); }
   int rotary_count() const { return static_cast<int>(rotary.size()); }

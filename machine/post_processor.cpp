@@ -2,11 +2,36 @@
 
 #include "support/input_error.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <numbers>
 
 namespace drom::machine {
+
+double default_spindle_speed(double tool_diameter) {
+  if (!(tool_diameter > 0)) return 10000;
+  const double rpm = 1000 * 300 / (std::numbers::pi * tool_diameter);
+  return std::clamp(std::round(rpm / 100) * 100, 1000.0, 24000.0);
+}
+
+double spindle_speed(const PostOptions& options) { return options.spindle_speed > 0 ? options.spindle_speed : default_spindle_speed(options.tool_diameter); }
+
+std::string program_header(const PostOptions& options, const std::string& modal_line, const std::string& tool_length_line, const std::string& comments) {
+  char buf[160];
+  std::string out = "%\n(" + options.title + ")\n" + comments;
+  out += "G21 G90 G17 G40 G94 G54" + (modal_line.empty() ? std::string() : " " + modal_line) + "\n";
+  std::snprintf(buf, sizeof buf, "T%d M6\n", options.tool);
+  out += buf;
+  if (!tool_length_line.empty()) out += tool_length_line + "\n";
+  std::snprintf(buf, sizeof buf, "S%.0f %s\n", spindle_speed(options), options.counter_clockwise ? "M4" : "M3");
+  out += buf;
+  if (options.coolant != Coolant::off) out += options.coolant == Coolant::flood ? "M8\n" : "M7\n";
+  return out;
+}
+
+std::string program_end(const PostOptions& options) { return options.coolant != Coolant::off ? "M5\nM9\nM30\n%\n" : "M5\nM30\n%\n"; }
 
 std::string write_machine_gcode(const MachineProgram& program, const Machine& m, const PostOptions& options) {
   std::string out;
@@ -14,32 +39,64 @@ std::string write_machine_gcode(const MachineProgram& program, const Machine& m,
   const bool five_axis = m.rotary_count() > 0;
   const bool head = m.chain == KinematicChain::HeadHead || m.chain == KinematicChain::TableHead;
   const double tolerance = options.blend_tolerance >= 0 ? options.blend_tolerance : m.junction_tolerance;
-  out += "%\n(" + options.title + ")\n";
-  std::snprintf(buf, sizeof buf, "(machine %s: %s%s%s; written by drom's post-processor)\n", m.name.c_str(), chain_name(m.chain),
-                five_axis ? ", rotary axes " : "", m.rotary_letters().c_str());
-  out += buf;
-  out += head ? "(X Y Z: the head's pivot, tool length included; A B C in degrees)\n" : "(X Y Z: the tool tip, tool length by G43)\n";
-  if (m.junction == JunctionMode::ExactStop) std::snprintf(buf, sizeof buf, "G21 G90 G17 G40 G94 G61.1\n");
-  else std::snprintf(buf, sizeof buf, "G21 G90 G17 G40 G94 G64 P%.4f\n", tolerance);
-  out += buf;
-  std::snprintf(buf, sizeof buf, "T%d M6\n%s\n", options.tool, head ? "G49" : ("G43 H" + std::to_string(options.tool)).c_str());
-  out += buf;
-  if (options.spindle_speed > 0) {
-    std::snprintf(buf, sizeof buf, "S%.0f M3\n", options.spindle_speed);
-    out += buf;
-  }
-  auto axes = [&](const Joints& q) {
-    std::string words;
-    for (int j = 0; j < m.joint_count(); ++j) {
-      char w[48];
-      std::snprintf(w, sizeof w, " %c%.4f", m.axes[j].name, joint_in_program_units(m, j, q[j]));
-      words += w;
+  std::snprintf(buf, sizeof buf, "(machine %s: %s%s%s; written by drom's post-processor)\n", m.name.c_str(), chain_name(m.chain), five_axis ? ", rotary axes " : "",
+                m.rotary_letters().c_str());
+  std::string comments = buf;
+  comments += head ? "(X Y Z: the head's pivot, tool length included; A B C in degrees)\n" : "(X Y Z: the tool tip, tool length by G43)\n";
+  char modal[64];
+  if (m.junction == JunctionMode::ExactStop) std::snprintf(modal, sizeof modal, "G61.1");
+  else std::snprintf(modal, sizeof modal, "G64 P%.4f", tolerance);
+  out += program_header(options, modal, head ? "G49" : "G43 H" + std::to_string(options.tool), comments);
+
+  const int nj = m.joint_count();
+  auto words = [&](const Joints& q, int from, int to) {
+    std::string w;
+    for (int j = from; j < to; ++j) {
+      char one[48];
+      std::snprintf(one, sizeof one, " %c%.4f", m.axes[j].name, joint_in_program_units(m, j, q[j]));
+      w += one;
     }
-    return words;
+    return w;
   };
+  // The clearance plane: above every point of the program, below the safe height.
+  double highest = -std::numeric_limits<double>::infinity();
+  for (const MachineBlock& b : program.blocks) highest = std::max({highest, b.start[2], b.end[2]});
+  const double plane = std::min(m.safe_z, highest + options.clearance);
+
   bool inverse_time = false;
   double feed = -1;
-  if (!program.blocks.empty()) out += "G0" + axes(program.blocks.front().start) + "\n";
+  Joints at = Joints::Zero(nj);
+  bool known = false;  // where the machine stands before the first move is not known
+  auto g0 = [&](const std::string& axes) {
+    out += (inverse_time ? "G94 G0" : "G0") + axes + "\n";
+    inverse_time = false;
+  };
+  auto z_to = [&](double z) {
+    Joints q = at;
+    q[2] = z;
+    g0(words(q, 2, 3));
+    at[2] = z;
+  };
+  auto rapid_to = [&](const Joints& target) {
+    bool turns = !known;
+    for (int j = 3; j < nj; ++j) turns = turns || std::abs(target[j] - at[j]) > 1e-9;
+    const bool slides = !known || std::hypot(target[0] - at[0], target[1] - at[1]) > 1e-9;
+    if (turns) {
+      if (!known || at[2] < m.safe_z - 1e-9) z_to(m.safe_z);
+      if (five_axis) g0(words(target, 3, nj));
+      g0(words(target, 0, 2));
+    } else if (slides) {
+      const double lift = std::max({plane, at[2], target[2]});
+      if (at[2] < lift - 1e-9) z_to(lift);
+      g0(words(target, 0, 2));
+    }
+    const double z = at[2];
+    at = target;
+    at[2] = z;
+    known = true;
+    if (std::abs(target[2] - at[2]) > 1e-9) z_to(target[2]);
+  };
+  if (!program.blocks.empty()) rapid_to(program.blocks.front().start);
   for (const MachineBlock& b : program.blocks) {
     if (b.type == MoveType::Dwell) {
       std::snprintf(buf, sizeof buf, "G4 P%.4f\n", b.programmed_duration);
@@ -48,30 +105,32 @@ std::string write_machine_gcode(const MachineProgram& program, const Machine& m,
     }
     if (b.type == MoveType::Arc) throw std::logic_error("write_machine_gcode: arcs are written by levelset::write_gcode");
     if (b.type == MoveType::Rapid) {
-      out += (inverse_time ? "G94 G0" : "G0") + axes(b.end) + "\n";
-      inverse_time = false;
+      rapid_to(b.end);
       continue;
     }
     if (!(b.programmed_duration > 0)) throw std::logic_error("write_machine_gcode: a cutting block without a duration");
     if (five_axis) {
       // Inverse time: F is the number of such blocks per minute.
-      std::snprintf(buf, sizeof buf, "%sG1%s F%.6f\n", inverse_time ? "" : "G93 ", axes(b.end).c_str(), 60.0 / b.programmed_duration);
+      std::snprintf(buf, sizeof buf, "%sG1%s F%.6f\n", inverse_time ? "" : "G93 ", words(b.end, 0, nj).c_str(), 60.0 / b.programmed_duration);
       inverse_time = true;
       out += buf;
     } else {
       const double length = (b.end.head<3>() - b.start.head<3>()).norm();
       const double f = 60.0 * length / b.programmed_duration;
       if (std::abs(f - feed) > 1e-9 * f) {
-        std::snprintf(buf, sizeof buf, "G1%s F%.4f\n", axes(b.end).c_str(), f);
+        std::snprintf(buf, sizeof buf, "G1%s F%.4f\n", words(b.end, 0, nj).c_str(), f);
         feed = f;
       } else {
-        std::snprintf(buf, sizeof buf, "G1%s\n", axes(b.end).c_str());
+        std::snprintf(buf, sizeof buf, "G1%s\n", words(b.end, 0, nj).c_str());
       }
       out += buf;
     }
+    at = b.end;
   }
+  // The end: back up to the safe height, the spindle and coolant off.
+  if (known && at[2] < m.safe_z - 1e-9) z_to(m.safe_z);
   if (inverse_time) out += "G94\n";
-  out += options.spindle_speed > 0 ? "M5\nM30\n%\n" : "M30\n%\n";
+  out += program_end(options);
   return out;
 }
 

@@ -16,12 +16,35 @@
 
 namespace drom::machine {
 
+enum class Coolant { off, flood, mist };
+
+// What makes a program one a machinist runs as it is (docs/machine.md, "Posted programs"):
+//   header   %, title, G21 G90 G17 G40 G94 G54, the junction mode, T M6, G43 H (G49 on head chains),
+//            S and M3/M4, M8/M7;
+//   start    G0 Z to the safe height first (the tool retracts along its axis on tip-controlled
+//            chains), then the rotary axes, then X Y, then down to the first point;
+//   rapids   a rapid that turns a rotary axis goes up to the safe height first; one that moves in X
+//            or Y crosses at the clearance plane (the program's highest point + clearance) at least;
+//   end      M5, M9, M30, %.
 struct PostOptions {
   std::string title = "drom";
-  int tool = 1;                 // T and H number
-  double spindle_speed = 0;     // rev/min; 0: no S word nor M3
-  double blend_tolerance = -1;  // mm for G64 P; negative: the machine's junction tolerance
+  int tool = 1;                  // T and H number
+  double tool_diameter = 0;      // mm: sets the default spindle speed
+  double spindle_speed = 0;      // rev/min; 0: default_spindle_speed(tool_diameter)
+  bool counter_clockwise = false;  // M4 instead of M3
+  Coolant coolant = Coolant::off;
+  double clearance = 10;         // mm above the program's highest point: where rapids cross in X, Y
+  double blend_tolerance = -1;   // mm for G64 P; negative: the machine's junction tolerance
 };
+
+// The default spindle speed: a cutting speed of 300 m/min (carbide in aluminium alloy) on the tool's
+// diameter, rounded to 100 rev/min, within [1 000, 24 000]; 10 000 rev/min when the diameter is unknown.
+double default_spindle_speed(double tool_diameter);
+// The program's spindle speed: the options' own, or the default.
+double spindle_speed(const PostOptions& options);
+// The header's lines (from '%' to the spindle and coolant), and the end (M5 M9 M30 %).
+std::string program_header(const PostOptions& options, const std::string& modal_line, const std::string& tool_length_line, const std::string& comments = {});
+std::string program_end(const PostOptions& options);
 
 std::string post_process(const ClProgram& cl, const Kinematics& kinematics, const PostOptions& options = {});
 

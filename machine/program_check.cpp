@@ -2,13 +2,17 @@
 
 #include "machine/cl_data.hpp"
 #include "support/atomic_file.hpp"
+#include "support/run_folder.hpp"
 #include "support/input_error.hpp"
 #include "support/png_plot.hpp"
 #include "support/resources.hpp"
 #include "support/summary.hpp"
 #include "support/vtk_fields.hpp"
 
+#include <cctype>
 #include <chrono>
+#include <fstream>
+#include <regex>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -48,16 +52,72 @@ Loaded load(const ProgramCheckOptions& o, const Kinematics& kin) {
 
 std::string axis_label(const Machine& m, int j) { return std::string(1, m.axes[j].name); }
 
+// A subroutine file: its first statement opens an O-word `sub` and its last closes it (`endsub`),
+// comments, blank lines and '%' aside. It moves the machine only where a program calls it.
+bool is_subroutine_file(const fs::path& path) {
+  std::ifstream in(path);
+  std::vector<std::string> statements;
+  for (std::string raw; std::getline(in, raw);) {
+    std::string line;
+    int depth = 0;
+    for (char c : raw) {
+      if (c == ';' && depth == 0) break;
+      if (c == '(') ++depth;
+      else if (c == ')') depth = std::max(0, depth - 1);
+      else if (depth == 0 && !std::isspace(static_cast<unsigned char>(c))) line += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    }
+    if (!line.empty() && line != "%") statements.push_back(line);
+  }
+  static const std::regex opens(R"(^o(<[^>]*>|\d+)sub$)"), closes(R"(^o(<[^>]*>|\d+)endsub.*$)");
+  return statements.size() >= 2 && std::regex_match(statements.front(), opens) && std::regex_match(statements.back(), closes);
+}
+
+nlohmann::json machine_summary(const Machine& m) {
+  return {{"name", m.name}, {"origin", m.origin}, {"kinematics", chain_name(m.chain)}, {"rotary_axes", m.rotary_letters()},
+          {"interpolation_cycle_s", m.interpolation_cycle}, {"junction", m.junction == JunctionMode::Blend ? "blend" : m.junction == JunctionMode::Smooth ? "smooth" : "exact_stop"},
+          {"tool_length_mm", m.tool_length}};
+}
+
+// A program with no motion (a subroutine file, a tool-change demo) is a program, not bad input: it
+// takes no time on the machine.
+nlohmann::json report_no_motion(const ProgramCheckOptions& o, RunFolder& folder, const Machine& m, const std::string& reader, double read_s,
+                                std::chrono::steady_clock::time_point start, const std::string& what = "the program ends without moving the machine") {
+  nlohmann::json s;
+  s["command"] = "machine";
+  s["program"] = fs::absolute(o.program).string();
+  s["reader"] = reader;
+  s["no_motion"] = true;
+  s["no_motion_reason"] = what;
+  s["machine"] = machine_summary(m);
+  s["blocks"] = 0;
+  s["cycle_time_s"] = 0.0;
+  s["programmed_time_s"] = 0.0;
+  s["cutting_length_mm"] = 0.0;
+  s["travel_violations"] = nlohmann::json::array();
+  s["singularity_passages"] = nlohmann::json::array();
+  s["timing_s"] = {{"read", read_s}, {"total", seconds_since(start)}};
+  s["files"] = {"summary.json"};
+  s["host"] = machine_info();
+  write_summary(folder.staging(), s);
+  folder.commit();
+  return s;
+}
+
 }  // namespace
 
 nlohmann::json check_program(const ProgramCheckOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   const Machine m = load_machine(o.machine, o.machine_overrides);
   const Kinematics kin(m);
+  if (!is_cl_file(o.program) && is_subroutine_file(o.program)) {
+    RunFolder folder(o.out);
+    return report_no_motion(o, folder, m, "drom", seconds_since(start), start, "a subroutine file: its moves run where a program calls it");
+  }
   Loaded loaded = load(o, kin);
   const MachineProgram& program = loaded.program;
-  if (program.blocks.empty()) throw InputError(o.program.string() + ": the program has no move");
   const double read_s = seconds_since(start);
+  RunFolder folder(o.out);  // before the prediction: an output folder that cannot be written is found now
+  if (program.blocks.empty()) return report_no_motion(o, folder, m, loaded.reader, read_s, start);
 
   // Travel per block end, and passages near the singular direction.
   std::vector<JointPath::Violation> travel = loaded.violations;
@@ -92,7 +152,7 @@ nlohmann::json check_program(const ProgramCheckOptions& o) {
   const double predict_s = seconds_since(t_predict);
 
   const auto t_write = std::chrono::steady_clock::now();
-  fs::create_directories(o.out);
+  const fs::path& out = folder.staging();
   std::vector<std::string> files;
   const int nj = m.joint_count();
   auto programmed_feed = [&](std::size_t block) {
@@ -134,15 +194,15 @@ nlohmann::json check_program(const ProgramCheckOptions& o) {
       }
       axes += "\n";
     }
-    write_file_atomically(o.out / "feed.csv", feed);
-    write_file_atomically(o.out / "axes.csv", axes);
+    write_file_atomically(out / "feed.csv", feed);
+    write_file_atomically(out / "axes.csv", axes);
     files.insert(files.end(), {"feed.csv", "axes.csv"});
     PlotSpec spec;
     spec.title = o.program.filename().string() + " on " + m.name + ": the feed it reaches";
     spec.x_label = "path length (mm of tool tip in the part frame)";
     spec.y_label = "feed (mm/min)";
     spec.series = {programmed, predicted};
-    if (write_png_plot(o.out / "feed.png", spec)) files.push_back("feed.png");
+    if (write_png_plot(out / "feed.png", spec)) files.push_back("feed.png");
   }
   {
     std::string csv = "block,line,type,length,t_start_s,duration_s,programmed_duration_s,cap_per_min,cap_source,cap_axis,limit,limit_axis,"
@@ -159,7 +219,7 @@ nlohmann::json check_program(const ProgramCheckOptions& o) {
                     b.min_speed * 60, b.max_speed * 60);
       csv += buf;
     }
-    write_file_atomically(o.out / "blocks.csv", csv);
+    write_file_atomically(out / "blocks.csv", csv);
     files.push_back("blocks.csv");
   }
   {
@@ -194,7 +254,7 @@ nlohmann::json check_program(const ProgramCheckOptions& o) {
                               {"programmed / predicted time", ratio},
                               {"line", line},
                               {"rapid", rapid}};
-    write_polylines_vtp(o.out / "saturation.vtp", pl);
+    write_polylines_vtp(out / "saturation.vtp", pl);
     files.push_back("saturation.vtp");
   }
 
@@ -203,9 +263,8 @@ nlohmann::json check_program(const ProgramCheckOptions& o) {
   s["program"] = fs::absolute(o.program).string();
   s["reader"] = loaded.reader;
   s["start_assumed"] = loaded.start_assumed;
-  s["machine"] = {{"name", m.name}, {"origin", m.origin}, {"kinematics", chain_name(m.chain)}, {"rotary_axes", m.rotary_letters()},
-                  {"interpolation_cycle_s", m.interpolation_cycle}, {"junction", m.junction == JunctionMode::Blend ? "blend" : m.junction == JunctionMode::Smooth ? "smooth" : "exact_stop"},
-                  {"tool_length_mm", m.tool_length}};
+  s["no_motion"] = false;
+  s["machine"] = machine_summary(m);
   s["blocks"] = program.blocks.size();
   s["cycle_time_s"] = p.cycle_time;
   s["programmed_time_s"] = p.programmed_time;
@@ -234,7 +293,8 @@ nlohmann::json check_program(const ProgramCheckOptions& o) {
   s["timing_s"] = {{"read", read_s}, {"predict", predict_s}, {"write", seconds_since(t_write)}, {"total", seconds_since(start)}};
   s["files"] = files;
   s["host"] = machine_info();
-  write_summary(o.out, s);
+  write_summary(out, s);
+  folder.commit();  // a program beyond the strokes still gets its report, then the error
   if (!travel.empty())
     throw InputError(travel.front().what + (travel.size() > 1 ? " (and " + std::to_string(travel.size() - 1) + " more; summary.json lists them)" : std::string()));
   return s;

@@ -30,6 +30,10 @@ int machine_command(const CommandOptions& options) {
   if (options.quiet) return 0;
   std::printf("drom machine: %s on %s (%s, read by %s) -> %s\n", o.program.string().c_str(), s["machine"]["name"].get<std::string>().c_str(),
               s["machine"]["kinematics"].get<std::string>().c_str(), s["reader"].get<std::string>().c_str(), o.out.string().c_str());
+  if (s["no_motion"].get<bool>()) {
+    std::printf("  no move: %s (cycle time 0 s)\n", s["no_motion_reason"].get<std::string>().c_str());
+    return 0;
+  }
   std::printf("  blocks                       %zu\n", s["blocks"].get<std::size_t>());
   std::printf("  cycle time                   %.3f s (%.3f s at the programmed feed: x%.3f)\n", s["cycle_time_s"].get<double>(), s["programmed_time_s"].get<double>(),
               s["cycle_time_over_programmed"].get<double>());

@@ -51,18 +51,22 @@ class Stopwatch {
 // An operation's CL data, G-code and predicted time on the machine; a post-processor's refusal
 // (a pose beyond a stroke) is kept as the operation's error.
 void make_program(PacketOperation& op, const CloudPath& path, const Eigen::Matrix3d& frame, double feed, const std::string& title, int tool_number,
-                  const CopySettings& s, const machine::Kinematics& kin) {
+                  double tool_radius, const CopySettings& s, const machine::Kinematics& kin) {
   op.path = path;
   op.cl = to_cl_program(path, frame, feed, title);
   if (op.cl.points.empty()) return;
-  machine::PostOptions post;
+  machine::PostOptions post = s.program;
   post.title = title;
   post.tool = tool_number;
-  post.spindle_speed = s.spindle_speed;
+  post.tool_diameter = 2 * tool_radius;
   try {
     op.gcode = machine::post_process(op.cl, kin, post);
-    const machine::ClOnMachine on = machine::cl_to_machine_program(op.cl, kin);
-    if (on.joints.violations.empty()) op.cycle_time = machine::predict_feed(on.program, kin).cycle_time;
+    op.verdict = machine::judge_program(op.gcode, title, kin);
+    op.cycle_time = op.verdict->cycle_time;
+    if (!op.verdict->runnable()) {
+      op.error = op.verdict->out_of_reach.front();
+      op.gcode.clear();
+    }
   } catch (const InputError& e) {
     op.gcode.clear();
     op.error = e.what();
@@ -188,14 +192,16 @@ PacketPlan plan_packet(std::size_t k, int points, const CopyResult& out, const P
     plan.roughing = plan_cloud_roughing(*in.map, plan.frame, out.stock, area, bottom, s.roughing);
     // The program (post-processing and feed prediction, one thread) and the whole-tool check (many)
     // read the same path: side by side.
-    tbb::parallel_invoke([&] { make_program(plan.rough_op, plan.roughing->path, plan.frame, s.roughing_feed, name + " roughing", 2, s, in.kin); },
+    tbb::parallel_invoke([&] { make_program(plan.rough_op, plan.roughing->path, plan.frame, s.roughing_feed, name + " roughing", s.roughing_tool_number,
+                                               s.roughing.tool.cutter.radius, s, in.kin); },
                          [&] { plan.rough_op.check = check_path(bins, plan.roughing->path, s.roughing.tool, s.roughing.tool.cutter.radius / 4, 0); });
     watch.add_to("roughing");
   }
   try {
     const CloudArea area(mine, std::max(s.finishing.longitudinal_step, s.normals.grid_step), s.finishing.tool.cutter.radius);
     plan.finishing = plan_cloud_finishing(bins, area, s.finishing);
-    tbb::parallel_invoke([&] { make_program(plan.finish_op, plan.finishing->path, plan.frame, s.finishing_feed, name + " finishing", 1, s, in.kin); },
+    tbb::parallel_invoke([&] { make_program(plan.finish_op, plan.finishing->path, plan.frame, s.finishing_feed, name + " finishing", s.program.tool,
+                                               s.finishing.tool.cutter.radius, s, in.kin); },
                          [&] {
                            plan.finish_op.check =
                                check_path(bins, plan.finishing->path, s.finishing.tool, std::max(0.05, s.finishing.longitudinal_step / 2), s.finishing.chord_tolerance);

@@ -6,6 +6,7 @@
 // finishing on the whole cloud; each path checked again against the cloud with the whole tool, made
 // into CL data and 3+2 G-code through machine/'s post-processor, and timed on the machine.
 #include "geometry/point_cloud.hpp"
+#include "machine/program_verdict.hpp"
 #include "machine/cl_data.hpp"
 #include "machine/kinematics.hpp"
 #include "paths/copy/cloud_finishing.hpp"
@@ -29,6 +30,7 @@ struct PacketOperation {
   machine::ClProgram cl;           // part frame
   std::string gcode;               // empty when the post-processor refused it (see error)
   std::string error;
+  std::optional<machine::ProgramVerdict> verdict;  // the posted program read back (machine/program_verdict.hpp)
   double cycle_time = 0;           // s, predicted on the machine
   PathCheck check;                 // against the cloud and the obstacles, with the whole tool
 };

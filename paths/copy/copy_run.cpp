@@ -1,10 +1,12 @@
 #include "paths/copy/copy_run.hpp"
 
+#include "geometry/cloud_outliers.hpp"
 #include "geometry/cloud_reader.hpp"
 #include "geometry/cloud_writer.hpp"
 #include "machine/machine_definition.hpp"
 #include "paths/copy/cloud_copy.hpp"
 #include "support/atomic_file.hpp"
+#include "support/run_folder.hpp"
 #include "support/input_error.hpp"
 #include "support/summary.hpp"
 #include "support/toml_reader.hpp"
@@ -86,6 +88,7 @@ nlohmann::json write_operation(const std::filesystem::path& out, const std::stri
     write_file_atomically(out / dir / (name + ".ngc"), op.gcode);
     files.push_back(dir + "/" + name + ".ngc");
   }
+  if (op.verdict) e["program_verdict"] = op.verdict->to_json();
   if (!op.error.empty()) e["post_processor_error"] = op.error;
   return e;
 }
@@ -162,6 +165,40 @@ nlohmann::json copy_summary(const CopyRunOptions& o, const CopySettings& s, cons
 
 }  // namespace
 
+// The scan as the copy uses it: points that are not finite numbers and far outliers dropped and
+// counted, or refused (cloud.bad_points = "error").
+geometry::PointCloud read_scan(const CopyRunOptions& o, const CopySettings& s, geometry::FarOutliers& outliers) {
+  geometry::PointCloud cloud = geometry::read_cloud(o.cloud, s.scale, {.not_finite_is_error = s.bad_points_are_errors});
+  outliers = geometry::find_far_outliers(cloud);
+  if (outliers.indices.empty()) return cloud;
+  if (s.bad_points_are_errors) {
+    const Eigen::Vector3d& p = cloud.points[outliers.indices.front()];
+    char where[160];
+    std::snprintf(where, sizeof where, "point (%.3f, %.3f, %.3f) mm", p.x(), p.y(), p.z());
+    throw InputError(o.cloud.string() + ": " + where + " is a far outlier (" + std::to_string(outliers.indices.size()) +
+                     " in all): no 8 other points within " + std::to_string(outliers.threshold_mm) + " mm, where the cloud's typical spacing is " +
+                     std::to_string(outliers.median_mm) + " mm; cloud.bad_points = \"drop\" drops them");
+  }
+  geometry::remove_points(cloud, outliers.indices);
+  cloud.dropped.far_outliers = outliers.indices.size();
+  return cloud;
+}
+
+nlohmann::json scan_summary(const geometry::PointCloud& cloud, const geometry::FarOutliers& outliers, const CopyResult& r) {
+  const auto& d = cloud.dropped;
+  const auto share = [](std::size_t part, std::size_t whole) { return whole ? static_cast<double>(part) / static_cast<double>(whole) : 0.0; };
+  return {{"points_read", cloud.size() + d.not_finite + d.far_outliers},
+          {"points_kept", cloud.size()},
+          {"dropped_not_finite", d.not_finite},
+          {"first_not_finite", d.first_not_finite},
+          {"dropped_far_outliers", d.far_outliers},
+          {"outlier_threshold_mm", outliers.threshold_mm},
+          {"typical_spacing_mm", outliers.median_mm},
+          {"points_with_normal", r.row_points.size()},
+          {"coverage_of_points_kept", share(r.packets.covered, cloud.size())},
+          {"coverage_of_points_with_normal", share(r.packets.covered, r.row_points.size())}};
+}
+
 nlohmann::json run_copy(const CopyRunOptions& o) {
   std::vector<std::string> overrides = o.overrides;
   if (!o.tool.empty()) overrides.push_back("finishing.tool=\"" + o.tool + "\"");
@@ -169,20 +206,28 @@ nlohmann::json run_copy(const CopyRunOptions& o) {
   const CopySettings s = o.settings ? read_copy_settings(read_input_file(*o.settings, "settings file"), o.settings->string(), overrides) : read_copy_settings("", "<defaults>", overrides);
   const machine::Machine m = machine::load_machine(s.machine, s.machine_overrides);
   const machine::Kinematics kinematics(m);
-  const geometry::PointCloud cloud = geometry::read_cloud(o.cloud, s.scale);
+  geometry::FarOutliers outliers;
+  const geometry::PointCloud cloud = read_scan(o, s, outliers);
+  RunFolder folder(o.out);  // before the work: an output folder that cannot be written is found now
   const auto progress = [&](const std::string& line) {
     if (!o.quiet) std::printf("  %s\n", line.c_str()), std::fflush(stdout);
   };
+  if (cloud.dropped.not_finite + cloud.dropped.far_outliers > 0)
+    progress("scan: " + std::to_string(cloud.size()) + " points kept; dropped " + std::to_string(cloud.dropped.not_finite) + " not finite" +
+             (cloud.dropped.not_finite ? " (first: " + cloud.dropped.first_not_finite + ")" : std::string()) + " and " + std::to_string(cloud.dropped.far_outliers) +
+             " far outliers (no 8 neighbours within " + std::to_string(outliers.threshold_mm) + " mm)");
   const CopyResult r = copy_cloud(cloud, s, kinematics, progress);
 
-  std::filesystem::create_directories(o.out);
+  const std::filesystem::path& out = folder.staging();
   std::vector<std::string> files;
-  write_point_files(o.out, cloud, r, files);
+  write_point_files(out, cloud, r, files);
   nlohmann::json packets = nlohmann::json::array();
   const auto sizes = r.packets.sizes();
-  for (std::size_t k = 0; k < r.plans.size(); ++k) packets.push_back(write_packet(o.out, k, r.plans[k], sizes[k], files));
-  const nlohmann::json summary = copy_summary(o, s, m, r, packets, files);
-  write_summary(o.out, summary);
+  for (std::size_t k = 0; k < r.plans.size(); ++k) packets.push_back(write_packet(out, k, r.plans[k], sizes[k], files));
+  nlohmann::json summary = copy_summary(o, s, m, r, packets, files);
+  summary["scan"] = scan_summary(cloud, outliers, r);
+  write_summary(out, summary);
+  folder.commit();
   return summary;
 }
 

@@ -1,5 +1,7 @@
 #include "paths/copy/copy_settings.hpp"
 
+#include "machine/program_keys.hpp"
+
 #include "support/input_error.hpp"
 #include "support/toml_reader.hpp"
 
@@ -63,7 +65,8 @@ std::string default_copy_settings() {
   std::ostringstream t;
   const auto& d = s.normals.directions;
   t << "# drom copy: every key and its default (docs/case-files.md, \"drom copy\").\n"
-    << "[cloud]\nscale = " << s.scale << "                 # every coordinate multiplied by it (the seed scaled by 7/20 and 1/3)\n\n"
+    << "[cloud]\nscale = " << s.scale << "                 # every coordinate multiplied by it (the seed scaled by 7/20 and 1/3)\n"
+    << "bad_points = \"drop\"          # NaN/Inf points and far outliers: \"drop\" (counted in summary.json) or \"error\"\n\n"
     << "[normals]                   # sphere launching (Makki 2009, Algorithm 1)\nsphere_diameter = " << s.normals.diameter << "\ngrid_step = " << s.normals.grid_step
     << "\ndirections = [";
   for (std::size_t i = 0; i < d.size(); ++i) t << (i ? ", " : "") << "[" << d[i].x() << ", " << d[i].y() << ", " << d[i].z() << "]";
@@ -80,9 +83,11 @@ std::string default_copy_settings() {
     << "[roughing]\nenabled = true\ntool = \"" << tool_text(s.roughing.tool.cutter) << "\"\nflute_length = 0.0\nshank_diameter = 0.0\ngauge_length = " << s.roughing.tool.gauge_length
     << "\nholder_diameter = " << 2 * s.roughing.tool.holder_reach() << "\nlongitudinal_step = " << s.roughing.longitudinal_step << "\ntransverse_step = " << s.roughing.transverse_step
     << "\ndepth = " << s.roughing.depth << "\nallowance = " << s.roughing.allowance << "               # mm left for finishing, at least\nvoxel = 0.0                   # 0: min(steps, depth) / 4\nramp_angle = "
-    << s.roughing.ramp_angle << "\nfeed = " << s.roughing_feed << "\n\n"
-    << "[machine]\nname = \"" << s.machine << "\"      # a cases/machines/ name or a file\nset = []                      # overrides, e.g. [\"axes.A.stroke=[-30, 120]\"]\nspindle_speed = "
-    << s.spindle_speed << "\n\n"
+    << s.roughing.ramp_angle << "\nfeed = " << s.roughing_feed << "\ntool_number = " << s.roughing_tool_number << "\n\n"
+    << "[machine]\nname = \"" << s.machine << "\"      # a cases/machines/ name or a file\nset = []                      # overrides, e.g. [\"axes.A.stroke=[-30, 120]\"]\n\n"
+    << "[program]                   # the posted programs (docs/case-files.md, \"[program]\")\ntool_number = " << s.program.tool
+    << "              # the finishing tool's T and H (roughing.tool_number: the roughing tool's)\nspindle_speed = 0            # rev/min; 0: 300 m/min on the tool's diameter\n"
+    << "spindle = \"cw\"\ncoolant = \"off\"             # off, flood or mist\nclearance = " << s.program.clearance << "               # mm above the highest point: where rapids cross\n\n"
     << "[stock]\nbox = []                      # [x0, x1, y0, y1, z0, z1]; empty: the cloud's box grown by margin\nmargin = " << s.stock_margin
     << "\nbase_is_obstacle = true       # the stock under the cloud stays: never entered\n\n"
     << "# [[fixtures]]                # solids the tool must not enter (part frame)\n# kind = \"box\"                # box = [x0, x1, y0, y1, z0, z1]\n"
@@ -95,6 +100,7 @@ CopySettings read_copy_settings(const std::string& text, const std::string& orig
   s.origin = text.empty() ? "<defaults>" : origin;
   TomlReader r(text, s.origin, overrides);
   s.scale = r.real("cloud.scale", Range::positive(), s.scale);
+  s.bad_points_are_errors = r.choice("cloud.bad_points", {"drop", "error"}, s.bad_points_are_errors ? std::string("error") : std::string("drop")) == "error";
 
   s.normals.diameter = r.real("normals.sphere_diameter", Range::positive(), s.normals.diameter);
   s.normals.grid_step = r.real("normals.grid_step", Range::positive(), s.normals.grid_step);
@@ -148,7 +154,8 @@ CopySettings read_copy_settings(const std::string& text, const std::string& orig
 
   s.machine = r.text("machine.name", s.machine);
   if (r.has("machine.set")) s.machine_overrides = r.strings("machine.set");
-  s.spindle_speed = r.real("machine.spindle_speed", Range::non_negative(), s.spindle_speed);
+  s.program = machine::read_program_keys(r, s.program);
+  s.roughing_tool_number = static_cast<int>(r.integer("roughing.tool_number", 1, 999, s.roughing_tool_number));
 
   if (r.has("stock.box")) {
     const auto box = r.reals("stock.box", Range{});

@@ -5,6 +5,7 @@
 // +-X, +-Y, +Z on a 0.5 mm grid; 216 directions (10 x 30 degrees); the window [5, 85] degrees; a ball
 // D6 on a 53 mm holder 40 mm out, 0.2 mm steps; roughing with a flat D10, 3 x 3 x 2 mm; the
 // table-table UCP 710-like machine. Keys: docs/case-files.md ("drom copy").
+#include "machine/post_processor.hpp"
 #include "paths/copy/cloud_finishing.hpp"
 #include "paths/copy/cloud_roughing.hpp"
 #include "paths/copy/packets.hpp"
@@ -20,6 +21,9 @@ namespace drom::paths {
 struct CopySettings {
   std::string origin;  // the settings file, or "<defaults>"
   double scale = 1;    // every coordinate of the cloud multiplied by it
+  // Points with a NaN or infinite value, and far outliers (geometry/cloud_outliers.hpp): dropped and
+  // counted (false), or an error naming the first (true). Key cloud.bad_points = "drop" | "error".
+  bool bad_points_are_errors = false;
   SphereLaunchSettings normals;
   bool normals_from_file = false;  // a cloud that carries normals: use them for every point instead of launching spheres
   VisibilitySettings visibility;  // its tool is the finishing tool, its machine set by the caller
@@ -31,7 +35,10 @@ struct CopySettings {
   double roughing_feed = 5000;   // mm/min
   std::string machine = "ucp710_like";
   std::vector<std::string> machine_overrides;
-  double spindle_speed = 15000;  // rev/min
+  // The [program] table (machine/program_keys.hpp): header, spindle, coolant, clearance, and the
+  // finishing tool's number; the roughing tool's is roughing.tool_number.
+  machine::PostOptions program;
+  int roughing_tool_number = 2;
   std::optional<Eigen::Vector3d> stock_lo, stock_hi;  // part frame; none: the cloud's box grown by stock_margin
   double stock_margin = 5;
   bool stock_base_is_obstacle = true;  // the stock under the cloud's lowest point stays: the tool must not enter it

@@ -1,5 +1,6 @@
 #include "paths/finish/finish_case.hpp"
 
+#include "machine/program_keys.hpp"
 #include "paths/finish/surface_samples.hpp"
 #include "support/input_error.hpp"
 #include "support/toml_reader.hpp"
@@ -64,6 +65,7 @@ FinishCase load_finish_case(const std::filesystem::path& path, const std::vector
   } else if (std::filesystem::path(c.machine_definition).is_relative()) {
     c.machine_definition = (path.parent_path() / c.machine_definition).string();
   }
+  c.program = machine::read_program_keys(r, {});
   c.samples = static_cast<int>(r.integer("finish.samples", 4, 400, 80));
   c.mesh_step = r.real("finish.mesh_step", Range::open_closed(0, 10), 0.5);
   if (r.has("finish.orientation")) {

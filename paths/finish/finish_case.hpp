@@ -4,6 +4,7 @@
 // (docs/case-files.md, "Finishing cases"). Read with the same checks as every drom case: unknown
 // keys are errors, and errors name the file, the line and the key.
 #include "geometry/surface_input.hpp"
+#include "machine/post_processor.hpp"
 #include "paths/finish/clustering.hpp"
 #include "paths/finish/finish_optimizer.hpp"
 #include "paths/finish/zone_machining.hpp"
@@ -22,6 +23,7 @@ struct FinishCase {
   Tool ball{ToolKind::ball, 5, 5}, torus{ToolKind::torus, 5, 2};
   FinishingSettings settings;       // the tool in it is the case's (the torus when auto, until the verdict)
   std::string machine_definition;   // machine/'s definition (a file or a shipped name): times and posts the program
+  machine::PostOptions program;     // the [program] table (machine/program_keys.hpp); the tool's diameter is set when posting
   int samples = 80;                 // clustering grid, per side
   double mesh_step = 0.5;           // mm
   SetupMode setup = SetupMode::three_axis;

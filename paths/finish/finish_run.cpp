@@ -7,9 +7,11 @@
 #include "paths/finish/scallop_check.hpp"
 #include "machine/feed_prediction.hpp"
 #include "machine/post_processor.hpp"
+#include "machine/program_verdict.hpp"
 #include "support/atomic_file.hpp"
 #include "support/input_error.hpp"
 #include "support/png_plot.hpp"
+#include "support/run_folder.hpp"
 #include "support/summary.hpp"
 #include "support/version.hpp"
 
@@ -295,35 +297,43 @@ json length_floor(const FinishCase& c, const FinishingSettings& settings, const 
 }
 
 // Stage 6's program: machine/'s inverse kinematics, feed predictor and post-processor on the case's
-// machine. A program the machine cannot run is not written; the note says why.
+// machine, then the posted text read back and judged (machine/program_verdict.hpp). A program the
+// machine cannot run is not written: the run ends with exit 3 and `refused` says why.
 struct PostedProgram {
-  double predicted_cycle_time = -1;  // s; < 0: no program
-  std::string note;
+  double predicted_cycle_time = -1;  // s, of the CL path as planned; < 0: no program
+  std::optional<machine::ProgramVerdict> verdict;
+  std::string refused;
 };
 
-PostedProgram post_program(const FinishCase& c, const FinishingPlan& plan, const FinishingSettings& settings, const std::filesystem::path& out,
-                           std::vector<std::string>& files, const Say& say) {
+PostedProgram post_program(const FinishCase& c, const machine::Machine& m, const FinishingPlan& plan, const FinishingSettings& settings,
+                           const std::filesystem::path& out, std::vector<std::string>& files, const Say& say) {
   PostedProgram posted;
   try {
-    const machine::Machine m = machine::load_machine(c.machine_definition);
     const machine::Kinematics kinematics(m);
     const machine::ClProgram cl = cl_program(plan, settings.tool, settings.timer.cutting().feed * 60, settings.clearance, settings.approach);
     const machine::ClOnMachine on = machine::cl_to_machine_program(cl, kinematics);
     if (!on.joints.violations.empty()) {
-      posted.note = "no program: on " + m.name + ", " + on.joints.violations.front().what;
+      posted.refused = "on " + m.name + ", " + on.joints.violations.front().what;
     } else {
       posted.predicted_cycle_time = machine::predict_feed(on.program, kinematics).cycle_time;
-      write_file_atomically(out / "program.ngc", machine::post_process(cl, kinematics, {"drom finish " + c.name}));
-      files.push_back("program.ngc");
-      std::ostringstream line;
-      line.precision(4);
-      line << "  program for " << m.name << ": cycle time " << posted.predicted_cycle_time << " s predicted by machine/ (junctions, per-axis limits, rapids)";
-      say(line.str());
+      machine::PostOptions post = c.program;
+      post.title = "drom finish " + c.name;
+      post.tool_diameter = 2 * settings.tool.radius;
+      const std::string text = machine::post_process(cl, kinematics, post);
+      posted.verdict = machine::judge_program(text, "program.ngc", kinematics);
+      if (!posted.verdict->runnable()) {
+        posted.refused = "on " + m.name + ", " + posted.verdict->out_of_reach.front();
+      } else {
+        write_file_atomically(out / "program.ngc", text);
+        files.push_back("program.ngc");
+        say("  program.ngc on " + m.name + ": " + posted.verdict->summary_line());
+        if (posted.verdict->slows_down()) say("  warning: at its programmed feed the program asks more than the machine's axes give: the machine slows down (the cycle time above is what it reaches)");
+      }
     }
   } catch (const InputError& e) {
-    posted.note = std::string("no program: ") + e.what();
+    posted.refused = e.what();
   }
-  if (!posted.note.empty()) say("  " + posted.note);
+  if (!posted.refused.empty()) say("  no runnable program: " + posted.refused);
   return posted;
 }
 
@@ -411,16 +421,20 @@ json finish_summary(const FinishCase& c, const FinishResults& r) {
   for (const auto& k : r.zoning.optima)
     s["optimization"].push_back({{"clusters", k.clusters}, {"zones", k.zones.count()}, {"f0_s", k.start_time}, {"f_star_s", k.best_time}, {"gain", k.gain()},
                                  {"black_box_equivalents", k.spent}});
-  if (!r.program.note.empty()) s["program"] = r.program.note;
+  if (r.program.verdict) s["program_verdict"] = r.program.verdict->to_json();
+  if (!r.program.refused.empty()) s["program_refused"] = r.program.refused;
   s["files"] = r.files;
   return s;
 }
 
 }  // namespace
 
-json run_finish(const FinishCase& c, const FinishRunOptions& o) {
+json run_finish(const FinishCase& c, const FinishRunOptions& options) {
   const auto started = std::chrono::steady_clock::now();
-  std::filesystem::create_directories(o.out);
+  const machine::Machine m = machine::load_machine(c.machine_definition);  // a wrong machine is found before the work
+  RunFolder folder(options.out, {.resume = options.resume, .reused = {"optimization"}});
+  FinishRunOptions o = options;
+  o.out = folder.staging();
   const Say say = [&](const std::string& line) {
     if (!o.quiet) std::printf("%s\n", line.c_str());
     std::fflush(stdout);
@@ -437,13 +451,14 @@ json run_finish(const FinishCase& c, const FinishRunOptions& o) {
   write_pass_polylines(o.out / "paths.vtp", plan, described.settings.tool);
   write_cl_csv(o.out / "cl.csv", plan, described.settings.tool);
   write_breakdown_csv(o.out / "breakdown.csv", plan);
-  const PostedProgram program = post_program(c, plan, described.settings, o.out, files, say);
+  const PostedProgram program = post_program(c, m, plan, described.settings, o.out, files, say);
   write_optimization_history(c, zoning.optima, o.out, files);
 
   json s = finish_summary(c, {described, zoning, plan, gouge_note, check, program, floor, files});
   s["elapsed_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   s["version"] = kVersion;
   write_summary(o.out, s);
+  folder.commit();
   return s;
 }
 

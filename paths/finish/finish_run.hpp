@@ -2,8 +2,9 @@
 // `drom finish CASE`: the surface described (PCA, the ball-or-torus verdict), zoned (optimised over K
 // with the seed's black box, or one partition as the case asks), finished by parallel planes, timed,
 // checked for its scallop, and written out (finish_outputs.hpp, summary.json, the optimisation
-// history). Each K's optimisation is kept under out/optimization/ so a rerun of the same case
-// resumes where it stopped.
+// history). The run owns its folder (support/run_folder.hpp): it writes into <out>.partial and swaps
+// it in at the end. Each K's optimisation is kept under optimization/, so `--resume` (resume) takes
+// up a killed run where it stopped, or reuses the last complete run's finished K values.
 #include "paths/finish/finish_case.hpp"
 
 #include <nlohmann/json.hpp>
@@ -16,6 +17,7 @@ struct FinishRunOptions {
   std::filesystem::path out = "out";
   bool quiet = false;
   int threads = 0;  // 0: one per hardware thread (K values run in parallel)
+  bool resume = false;
 };
 
 nlohmann::json run_finish(const FinishCase& c, const FinishRunOptions& options);

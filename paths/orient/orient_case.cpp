@@ -1,5 +1,7 @@
 #include "paths/orient/orient_case.hpp"
 
+#include "machine/program_keys.hpp"
+
 #include "geometry/surface_grid.hpp"
 #include "geometry/surface_input.hpp"
 #include "support/input_error.hpp"
@@ -162,6 +164,7 @@ OrientCase parse_orient_case(const std::string& text, const std::string& origin,
   c.clearance.required = r.real("check.required", Range::closed(-1e3, 1e3), c.clearance.required);
   c.clearance.gouge_spacing = r.real("check.gouge_spacing", Range::positive(), c.clearance.gouge_spacing);
   c.machine = r.text("machine.definition", c.machine);
+  c.program = machine::read_program_keys(r, {});
   // The relaxation under the machine's limits: its keys are read (and checked) even when it is off.
   constexpr double kRadian = std::numbers::pi / 180;
   RelaxationSettings relax;

@@ -2,6 +2,7 @@
 // The orient case (docs/case-files.md, "drom orient"): [scene], [tool], [model], [integration],
 // [field], [check], [machine] and [[check_surfaces]], read and checked (InputError with file, line and
 // key), and the scene it asks for, built once the read has checked its size.
+#include "machine/post_processor.hpp"
 #include "paths/orient/axis_dynamics.hpp"
 #include "paths/orient/clearance_check.hpp"
 #include "paths/orient/force_voxel_field.hpp"
@@ -38,6 +39,7 @@ struct OrientCase {
   double smoothing = 0;  // mm: σ of the zero-phase filter of the result (smooth_axis); 0: off
   ClearanceSettings clearance;
   std::string machine = "ucp710_like";
+  machine::PostOptions program;  // the [program] table (machine/program_keys.hpp); the tool's diameter is set when posting
   std::optional<Eigen::Vector3d> part_origin;  // machine.part_origin: the scene's own when unset
   bool model_on = true;            // false: the programmed axis only (what the clearance check flags)
   // [relax]: also the programmed axis relaxed under the machine's limits (thesis 003, eq. 5), checked

@@ -5,7 +5,9 @@
 #include "machine/cl_data.hpp"
 #include "machine/feed_prediction.hpp"
 #include "machine/post_processor.hpp"
+#include "machine/program_verdict.hpp"
 #include "support/atomic_file.hpp"
+#include "support/run_folder.hpp"
 #include "support/input_error.hpp"
 #include "support/png_plot.hpp"
 #include "support/summary.hpp"
@@ -19,6 +21,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <functional>
 #include <iostream>
@@ -636,6 +639,8 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   const machine::Kinematics kin(m);
   DynamicsSettings dynamics = c.dynamics;
   dynamics.singular_direction = kin.singular_direction();
+  std::optional<RunFolder> folder;  // taken before the work: an output folder that cannot be written is found now
+  if (options.write_files) folder.emplace(options.out);
 
   const Precomputed pre = precompute(c, scene);
   say("drom orient: " + scene.description + "; " + std::to_string(pre.obstacles.size()) + " obstacle nodes, " + std::to_string(pre.nodes.size()) + " tool nodes, " +
@@ -649,6 +654,11 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   const OrientationExtremes extremes = orientation_extremes(result.passes);
   result.summary = orient_summary(c, {scene, pre, integration, proof, on, m, origin, arena.max_concurrency()}, extremes, result);
   say(result_line(result, extremes, on));
+  char limits[320];
+  std::snprintf(limits, sizeof limits,
+                "  rotary axes at the programmed feed, demanded over available: velocity %.3gx, acceleration %.3gx, jerk %.3gx (programmed axis: %.3gx, %.3gx, %.3gx)",
+                on.ratio_after[0], on.ratio_after[1], on.ratio_after[2], on.ratio_before[0], on.ratio_before[1], on.ratio_before[2]);
+  say(limits);
   std::optional<Relaxation> relaxation;
   if (c.relax) {
     relaxation = relax_programmed_axes(c, scene, kin, *pre.checker, arena, result);
@@ -657,12 +667,26 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
         std::to_string(relaxation->summary["time_programmed_s"].get<double>()) + " -> " + std::to_string(relaxation->summary["time_relaxed_s"].get<double>()) + " s");
   }
   if (!options.write_files) return result;
-  const std::filesystem::path& out = options.out;
-  std::filesystem::create_directories(out);
+  const std::filesystem::path& out = folder->staging();
   write_file_atomically(out / "cl.csv", machine::cl_csv(on.program_after));
-  if (result.unreachable.empty()) write_file_atomically(out / "program.ngc", machine::post_process(on.program_after, kin, {"drom orient " + scene.name}));
   std::vector<std::string> files{"cl.csv", "path.vtp", "poses.vtp", "angles.csv", "axes.csv"};
-  if (result.unreachable.empty()) files.insert(files.begin() + 1, "program.ngc");
+  if (result.unreachable.empty()) {
+    // Posted, read back and judged (machine/program_verdict.hpp); written only when it stays within reach.
+    machine::PostOptions post = c.program;
+    post.title = "drom orient " + scene.name;
+    post.tool_diameter = 2 * scene.tool.cutter.radius;
+    const std::string text = machine::post_process(on.program_after, kin, post);
+    const machine::ProgramVerdict verdict = machine::judge_program(text, "program.ngc", kin);
+    result.summary["program_verdict"] = verdict.to_json();
+    if (verdict.runnable()) {
+      write_file_atomically(out / "program.ngc", text);
+      files.insert(files.begin() + 1, "program.ngc");
+      say("  program.ngc on " + m.name + ": " + verdict.summary_line());
+      if (verdict.slows_down()) say("  warning: at its programmed feed the program asks more than the machine's axes give: the machine slows down (the cycle time above is what it reaches)");
+    } else {
+      result.unreachable.push_back(verdict.out_of_reach.front());
+    }
+  }
   if (relaxation) {
     write_file_atomically(out / "relaxed_cl.csv", machine::cl_csv(relaxation->program));
     files.push_back("relaxed_cl.csv");
@@ -672,6 +696,7 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   result.summary["files"] = files;
   result.summary["resolved_case"] = c.resolved;
   write_summary(out, result.summary);
+  folder->commit();
   return result;
 }
 

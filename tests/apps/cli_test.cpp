@@ -97,6 +97,33 @@ TEST(Cli, UsageErrorsExitWithTwo) {
   EXPECT_EQ(drom("--help").exit_code, 0);
 }
 
+// Issue 44: each subcommand has its own default output folder, as its --help says (one shared
+// option variable once sent every subcommand to the last one registered, out/machine).
+TEST(Cli, EachSubcommandWritesToItsOwnDefaultFolder) {
+  const std::pair<const char*, const char*> defaults[] = {{"run", "out"},           {"offline", "out/offline"}, {"truth", "out/truth"}, {"reduce", "out/model"},
+                                                          {"finish", "out/finish"}, {"copy", "out/copy"},       {"orient", "out/orient"}, {"machine", "out/machine"},
+                                                          {"mesh", "out/mesh"},     {"removal", "out/removal"}, {"study", "out/study"}};
+  for (const auto& [command, folder] : defaults) {
+    const auto help = drom(std::string(command) + " --help").output;
+    EXPECT_NE(help.find(std::string("--out TEXT=") + folder + " "), std::string::npos) << command << ":\n" << help;
+  }
+  // What a run without --out really writes: drom machine and drom mesh from an empty folder.
+  const auto here = std::filesystem::current_path();
+  const auto dir = temp_dir() / "defaults";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "p.ngc") << "G21 G90\nG0 X0 Y0 Z5\nG1 X10 F500\nM30\n";
+  std::filesystem::current_path(dir);
+  const auto machine = drom("machine p.ngc --quiet");
+  const auto mesh = drom("mesh --set mesh.nx=10 --set mesh.ny=10 --quiet");
+  std::filesystem::current_path(here);
+  EXPECT_EQ(machine.exit_code, 0) << machine.output;
+  EXPECT_EQ(mesh.exit_code, 0) << mesh.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "machine" / "summary.json"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "mesh" / "mesh.vtu"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "machine" / "mesh.vtu"));
+}
+
 TEST(Cli, RunWritesVtkAndSummaryOnACoarsePlate) {
   const auto out = temp_dir() / "run_out";
   std::filesystem::remove_all(out);

@@ -2,6 +2,7 @@
 // outputs written; bad clouds and settings refused with exit code 2 naming the file and what is wrong
 // (issue 23, check 6).
 #include "drom_process.hpp"
+#include "tests/machine/shop_safe_program.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -9,7 +10,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
+#include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -27,8 +31,9 @@ fs::path write(const std::string& name, const std::string& text) {
   return p;
 }
 
-// A hemisphere of radius 15 on z = 0 sampled on rings 1 mm apart, with exact normals, as ASCII PLY.
-std::string dome_ply() {
+// A hemisphere of radius 15 on z = 0 sampled on rings 1 mm apart, with exact normals, as ASCII PLY;
+// `extra` vertex lines (x y z nx ny nz) after them.
+std::string dome_ply(const std::vector<std::string>& extra = {}) {
   std::ostringstream body;
   int n = 0;
   for (int i = 0; i <= 23; ++i) {
@@ -40,6 +45,7 @@ std::string dome_ply() {
       body << 15 * nx << " " << 15 * ny << " " << 15 * nz << " " << nx << " " << ny << " " << nz << "\n";
     }
   }
+  for (const auto& line : extra) body << line << "\n", ++n;
   return "ply\nformat ascii 1.0\nelement vertex " + std::to_string(n) +
          "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nend_header\n" + body.str();
 }
@@ -71,23 +77,59 @@ TEST(CopyCommand, DomeIsCopiedByPacketsWithItsOutputs) {
     EXPECT_GT(p["finishing"]["cycle_time_s"].get<double>(), 0);
   }
   EXPECT_NE(r.output.find("packets"), std::string::npos);
+  // Issue 44, check 2: both programs are ready to run, and were judged before being written.
+  for (const char* op : {"finishing", "roughing"}) {
+    std::ifstream in(out / "packet_1" / (std::string(op) + ".ngc"));
+    shop_safe::expect_shop_safe(std::string(std::istreambuf_iterator<char>(in), {}), std::string("packet_1/") + op + ".ngc");
+    EXPECT_TRUE(s["packets"][0][op]["program_verdict"]["runnable"].get<bool>()) << op;
+  }
   // The G-code indexes the table once per program and is read back by drom machine.
   const DromResult m = run_drom("machine " + (out / "packet_1" / "finishing.ngc").string() + " --machine ucp710_like --out " + (out / "check").string());
   EXPECT_EQ(m.exit_code, 0) << m.output;
 }
 
+// Issue 44, check 5: a scan with "no return" points (NaN) and one stray point 5 m above the part is
+// copied as the clean scan is; what was dropped is counted in summary.json and on the console.
+TEST(CopyCommand, NanPointsAndAFarOutlierAreDroppedAndCounted) {
+  const fs::path cloud = write("dome_dirty.ply", dome_ply({"nan 0 1 0 0 1", "1 nan 1 0 0 1", "0 0 5000 0 0 1", "1 1 1 nan 0 0"}));
+  const fs::path out = root() / "dome_dirty";
+  const std::string args = "copy " + cloud.string() + " --tool ball:6 --machine ucp710_like --set normals.from_file=true --set visibility.theta_step=10" +
+                           " --set finishing.step=1 --set finishing.scallop=0.05 --set roughing.enabled=false --out " + out.string();
+  const DromResult r = run_drom(args);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("3 not finite and 1 far outliers dropped"), std::string::npos) << r.output;
+  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  const auto& scan = s["scan"];
+  const int kept = scan["points_kept"].get<int>();
+  EXPECT_EQ(scan["points_read"].get<int>(), kept + 4);
+  EXPECT_EQ(scan["dropped_not_finite"].get<int>(), 3);
+  EXPECT_EQ(scan["dropped_far_outliers"].get<int>(), 1);
+  EXPECT_NE(scan["first_not_finite"].get<std::string>().find("dome_dirty.ply: line "), std::string::npos);
+  EXPECT_EQ(s["cloud_points"].get<int>(), kept);
+  // As on the clean dome: only the rim ring is out of reach, and both coverages are reported.
+  EXPECT_EQ(s["grouping"]["unmachinable"].get<int>(), 95);
+  EXPECT_NEAR(scan["coverage_of_points_with_normal"].get<double>(), s["grouping"]["coverage"].get<double>(), 1e-12);
+  EXPECT_LE(scan["coverage_of_points_kept"].get<double>(), scan["coverage_of_points_with_normal"].get<double>());
+  // cloud.bad_points = "error" names the first bad point instead.
+  const DromResult strict = run_drom(args + " --set cloud.bad_points=error");
+  EXPECT_EQ(strict.exit_code, 2) << strict.output;
+  EXPECT_NE(strict.output.find("dome_dirty.ply: line "), std::string::npos) << strict.output;
+  EXPECT_NE(strict.output.find("is not a finite number"), std::string::npos) << strict.output;
+}
+
 TEST(CopyCommand, BadCloudsAndSettingsAreRefusedWithExitCode2) {
   const std::string head = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n";
   const struct {
-    std::string name, text, expected;
+    std::string name, text, expected, settings;
   } cases[] = {
-      {"empty.xyz", "", "the cloud file is empty"},
-      {"nan.xyz", "0 0 0\n1 nan 0\n", "line 2: column 2: 'nan' is not a finite number"},
-      {"noz.ply", head + "end_header\n1 2\n3 4\n", "the vertex element has no property 'z'"},
+      {"empty.xyz", "", "the cloud file is empty", ""},
+      {"nan.xyz", "0 0 0\n1 nan 0\n", "line 2: column 2: 'nan' is not a finite number", " --set cloud.bad_points=error"},
+      {"noz.ply", head + "end_header\n1 2\n3 4\n", "the vertex element has no property 'z'", ""},
+      {"long.ply", head + "property float z\nend_header\n1 2 3\n3 4 5\n6 7 8\n", "line 10: data after the 2 vertices the header declares", ""},
   };
   for (const auto& c : cases) {
     const fs::path cloud = write(c.name, c.text);
-    const DromResult r = run_drom("copy " + cloud.string() + " --quiet --out " + (root() / "bad").string());
+    const DromResult r = run_drom("copy " + cloud.string() + c.settings + " --quiet --out " + (root() / "bad").string());
     EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.output;
     EXPECT_NE(r.output.find(c.name), std::string::npos) << r.output;
     EXPECT_NE(r.output.find(c.expected), std::string::npos) << r.output;

@@ -2,6 +2,7 @@
 // random moments and resumed, or runs on a disk that fills up and is freed step by step; in every
 // case nothing is lost: no partial file where a complete one is expected, no temporary left behind,
 // a clear error on a full disk, and the final files are the bytes an undisturbed run writes.
+#include "drom_process.hpp"
 #include "support/file_integrity.hpp"
 #include "support/input_error.hpp"
 
@@ -48,28 +49,6 @@ std::vector<std::string> args(const std::string& command, const fs::path& out, s
   return a;
 }
 
-// Starts drom with `a`, its output to `log`.
-pid_t spawn(const std::vector<std::string>& a, const fs::path& log) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-    ::dup2(fd, 1), ::dup2(fd, 2);
-    std::vector<char*> argv = {const_cast<char*>(DROM_BINARY)};
-    for (const auto& s : a) argv.push_back(const_cast<char*>(s.c_str()));
-    argv.push_back(nullptr);
-    ::execv(DROM_BINARY, argv.data());
-    ::_exit(127);
-  }
-  return pid;
-}
-
-// The exit code, or -signal.
-int finish(pid_t pid) {
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
-}
-
 struct Outcome {
   int code;
   std::string output;
@@ -78,7 +57,7 @@ struct Outcome {
 Outcome run(const std::vector<std::string>& a, const fs::path& scratch) {
   const auto log = scratch / "log.txt";
   fs::remove(log);
-  const int code = finish(spawn(a, log));
+  const int code = wait_drom(spawn_drom(a, log));
   std::ifstream in(log);
   return {code, std::string(std::istreambuf_iterator<char>(in), {})};
 }
@@ -211,11 +190,11 @@ void kill_the_offline_job_at_random(int kills, int landed, unsigned seed) {
   const auto out = dir / "killed";
   int killed = 0, finished = 0;
   for (int k = 0; k < kills; ++k) {
-    const pid_t pid = spawn(args("offline", out, {"--resume"}), dir / "killed.log");
+    const pid_t pid = spawn_drom(args("offline", out, {"--resume"}), dir / "killed.log");
     const double delay = when(rng);
     std::this_thread::sleep_for(std::chrono::duration<double>(delay));
     ::kill(pid, SIGKILL);
-    const int code = finish(pid);
+    const int code = wait_drom(pid);
     killed += code == -SIGKILL;
     finished += code == 0;
     std::printf("kill %2d at %.2f s: %s, %zu stations saved\n", k + 1, delay, code == -SIGKILL ? "killed" : code == 0 ? "had finished" : "failed", saved_stations(out));
@@ -257,10 +236,10 @@ TEST(Chaos, KillingDromReduceLeavesTheModelWholeOrAbsent) {
   std::uniform_real_distribution<double> when(0.02 * seconds, 1.1 * seconds);
   const auto model = dir / "killed" / "model.h5";
   for (int k = 0; k < 6; ++k) {
-    const pid_t pid = spawn({"reduce", db, "--out", model.string(), "--quiet"}, dir / "killed.log");
+    const pid_t pid = spawn_drom({"reduce", db, "--out", model.string(), "--quiet"}, dir / "killed.log");
     std::this_thread::sleep_for(std::chrono::duration<double>(when(rng)));
     ::kill(pid, SIGKILL);
-    finish(pid);
+    wait_drom(pid);
     if (fs::exists(model)) {
       EXPECT_EQ(sealed(model), "") << "kill " << k;
     }
@@ -310,11 +289,11 @@ TEST(Chaos, KillingDromRunLeavesNothingPartialAndTheNextRunWritesTheSameOutputs)
   const auto out = dir / "killed";
   int killed = 0;
   for (int k = 0; k < 8; ++k) {
-    const pid_t pid = spawn(args("run", out), dir / "killed.log");
+    const pid_t pid = spawn_drom(args("run", out), dir / "killed.log");
     const double delay = when(rng);
     std::this_thread::sleep_for(std::chrono::duration<double>(delay));
     ::kill(pid, SIGKILL);
-    const int code = finish(pid);
+    const int code = wait_drom(pid);
     killed += code == -SIGKILL;
     std::printf("kill %d of drom run at %.1f s: %s\n", k + 1, delay, code == -SIGKILL ? "killed" : code == 0 ? "had finished" : "failed");
     ASSERT_TRUE(code == -SIGKILL || code == 0) << bytes(dir / "killed.log");

@@ -2,6 +2,7 @@
 // (breakdown sums, the spot check within sh, machine/'s cycle time near the search's); an optimised
 // run resumes from its finished K; bad input exits with code 2 naming the file, line and key.
 #include "drom_process.hpp"
+#include "tests/machine/shop_safe_program.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -9,6 +10,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <string>
 
 namespace fs = std::filesystem;
 
@@ -22,7 +25,33 @@ fs::path root() {
 
 const std::string kCases = std::string(DROM_SOURCE_DIR) + "/cases/";
 
+std::string text_of(const fs::path& p) {
+  std::ifstream in(p);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
 }  // namespace
+
+// Issue 44, check 2: the posted programs, 3-axis and 3+2, are ready to run; each was read back and
+// judged before it was written (summary.json's program_verdict).
+TEST(FinishCommand, PostedProgramsAreReadyToRunAndJudged) {
+  for (const std::string setup : {"3-axis", "3+2"}) {
+    const fs::path out = root() / ("ready_" + setup);
+    const DromResult r = run_drom("finish " + kCases + "inclined_plane.toml --set zoning.optimize=false --set zoning.clusters=[2] --set finish.setup=" + setup +
+                                  " --set program.tool_number=7 --set program.coolant=flood --out " + out.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::string program = text_of(out / "program.ngc");
+    shop_safe::expect_shop_safe(program, setup + " program.ngc");
+    EXPECT_NE(program.find("\nT7 M6\n"), std::string::npos);
+    EXPECT_NE(program.find("\nS9500 M3\nM8\n"), std::string::npos);  // 300 m/min on the ball D10, then flood coolant
+    const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+    const auto& v = s["program_verdict"];
+    EXPECT_TRUE(v["runnable"].get<bool>());
+    EXPECT_GT(v["cycle_time_s"].get<double>(), 0);
+    EXPECT_FALSE(v["demand_at_programmed_feed"]["acceleration"]["axis"].get<std::string>().empty());
+    EXPECT_NE(r.output.find("program.ngc on "), std::string::npos) << r.output;
+  }
+}
 
 TEST(FinishCommand, InclinedPlaneWritesItsOutputs) {
   const fs::path out = root() / "plane";
@@ -60,9 +89,13 @@ TEST(FinishCommand, OptimisedRunResumesFromItsFinishedK) {
   ASSERT_EQ(first.exit_code, 0) << first.output;
   EXPECT_TRUE(fs::exists(out / "optimization" / "K2.json"));
   EXPECT_TRUE(fs::exists(out / "history.csv"));
-  const DromResult second = run_drom(args);
+  // Only --resume reuses an earlier run's work; without it a run starts afresh.
+  const DromResult second = run_drom(args + " --resume");
   ASSERT_EQ(second.exit_code, 0) << second.output;
   EXPECT_NE(second.output.find("(kept from an earlier run)"), std::string::npos) << second.output;
+  const DromResult third = run_drom(args);
+  ASSERT_EQ(third.exit_code, 0) << third.output;
+  EXPECT_EQ(third.output.find("(kept from an earlier run)"), std::string::npos) << third.output;
   const auto a = nlohmann::json::parse(std::ifstream(out / "summary.json"));
   EXPECT_EQ(a["optimization"].size(), 1u);
 }

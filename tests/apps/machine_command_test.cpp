@@ -8,6 +8,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <utility>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -89,4 +91,46 @@ TEST(MachineCommand, BadInputExitsWithTwoNamingTheFileLineAndKey) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("tilt.csv:3"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("stroke"), std::string::npos) << r.output;
+}
+
+// Issue 44, check 4: a program cut short (no M2/M30, no closing %) is refused naming its last line,
+// by drom's reader as by LinuxCNC's; a program with no move at all is reported as such, exit 0.
+TEST(MachineCommand, AProgramWithNoEndIsRefusedAndOneWithNoMoveTakesNoTime) {
+  const struct {
+    std::string name, text, expected;
+  } cut_short[] = {
+      {"cut.ngc", "G21 G90\nG0 X0 Y0 Z5\nG1 X10 F500\nG1 Y10\n", "cut.ngc:4: the program has no end (no M2 or M30, and no '%' around it)"},
+      {"open.ngc", "%\nG21 G90\nG0 X0 Y0 Z5\nG1 X10 F500\n", "open.ngc:4: the file ends with no closing '%'"},
+  };
+  for (const auto& c : cut_short) {
+    const fs::path program = write(c.name, c.text);
+    const DromResult r = run_drom("machine " + program.string() + " --reader plain --out " + (root() / "cut").string());
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << r.output;
+    const DromResult lcnc = run_drom("machine " + program.string() + " --reader rs274 --out " + (root() / "cut").string());
+    if (lcnc.output.find("rs274 is not installed") != std::string::npos) continue;
+    EXPECT_EQ(lcnc.exit_code, 2) << lcnc.output;
+    EXPECT_NE(lcnc.output.find(c.name + ":4: LinuxCNC's interpreter: File ended with no percent sign"), std::string::npos) << lcnc.output;
+  }
+  // What follows M30, or the closing %, is not read (as LinuxCNC reads it).
+  for (const std::string text : {"G21 G90\nG0 X0 Y0 Z5\nG1 X10 F500\nM30\nG1 Y10 (never read)\n", "%\nG21 G90\nG0 X0 Y0 Z5\nG1 X10 F500\n%\nG1 Y10\n"}) {
+    const fs::path program = write("ended.ngc", text);
+    const DromResult r = run_drom("machine " + program.string() + " --out " + (root() / "ended").string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const auto s = nlohmann::json::parse(std::ifstream(root() / "ended" / "summary.json"));
+    EXPECT_NEAR(s["cutting_length_mm"].get<double>(), 10, 1e-9) << text;
+  }
+  const fs::path still = write("tool_change.ngc", "(a tool change and nothing else)\nG21 G90 G17\nT3 M6\nG43 H3\nM30\n");
+  const fs::path sub = write("sub.ngc", "; a subroutine file: no M2, its moves run where it is called\no<sub> sub\nG1 X#1 F100\no<sub> endsub\n");
+  const fs::path out = root() / "still";
+  for (const auto& [program, reader] : std::vector<std::pair<fs::path, std::string>>{{still, "plain"}, {still, "rs274"}, {sub, "auto"}}) {
+    const DromResult r = run_drom("machine " + program.string() + " --reader " + reader + " --out " + out.string());
+    if (r.output.find("rs274 is not installed") != std::string::npos) continue;
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("no move"), std::string::npos) << r.output;
+    const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+    EXPECT_TRUE(s["no_motion"].get<bool>());
+    EXPECT_EQ(s["cycle_time_s"].get<double>(), 0.0);
+    EXPECT_EQ(s["blocks"].get<int>(), 0);
+  }
 }

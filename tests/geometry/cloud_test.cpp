@@ -3,6 +3,7 @@
 // against brute force.
 #include "geometry/cloud_bins.hpp"
 #include "geometry/cloud_kdtree.hpp"
+#include "geometry/cloud_outliers.hpp"
 #include "geometry/cloud_reader.hpp"
 #include "geometry/cloud_voxel_map.hpp"
 #include "geometry/cloud_writer.hpp"
@@ -121,8 +122,9 @@ TEST(CloudReader, ReadsXyzAndCsvWithHeadersCommentsAndNormals) {
 TEST(CloudReader, RefusesMalformedInputNamingWhereAndWhat) {
   EXPECT_ERROR(parse_xyz("", "empty.xyz"), "empty.xyz: the cloud has no point");
   EXPECT_ERROR(parse_xyz("# only a comment\n", "c.xyz"), "no point");
-  EXPECT_ERROR(parse_xyz("1 2 3\n4 nan 6\n", "n.xyz"), "n.xyz: line 2: column 2: 'nan' is not a finite number");
-  EXPECT_ERROR(parse_xyz("1 2 3\n4 5 inf\n", "i.xyz"), "line 2: column 3");
+  const CloudReadOptions strict{.not_finite_is_error = true};
+  EXPECT_ERROR(parse_xyz("1 2 3\n4 nan 6\n", "n.xyz", strict), "n.xyz: line 2: column 2: 'nan' is not a finite number");
+  EXPECT_ERROR(parse_xyz("1 2 3\n4 5 inf\n", "i.xyz", strict), "line 2: column 3");
   EXPECT_ERROR(parse_xyz("1 2 3\n4 5\n", "short.xyz"), "short.xyz: line 2: expected 3 columns");
   EXPECT_ERROR(parse_xyz("1 2\n", "two.xyz"), "expected at least 3 columns");
   EXPECT_ERROR(parse_xyz("1 2 3\n4 5 abc\n", "word.xyz"), "line 2: column 3: expected a number, found 'abc'");
@@ -139,7 +141,7 @@ TEST(CloudReader, RefusesMalformedInputNamingWhereAndWhat) {
   EXPECT_ERROR(parse_ply(head + "end_header\n1 2\n3 4\n", "noz.ply"), "noz.ply: line 3: the vertex element has no property 'z'");
   EXPECT_ERROR(parse_ply(head + "property float z\n", "noend.ply"), "noend.ply: the PLY header has no 'end_header' line");
   EXPECT_ERROR(parse_ply(head + "property float z\nend_header\n1 2 3\n", "trunc.ply"), "trunc.ply: line 9: the data ends after 1 of the 2 'vertex' elements");
-  EXPECT_ERROR(parse_ply(head + "property float z\nend_header\n1 2 3\n1 nan 3\n", "nan.ply"), "nan.ply: line 9: vertex 1 has a coordinate that is not a finite number");
+  EXPECT_ERROR(parse_ply(head + "property float z\nend_header\n1 2 3\n1 nan 3\n", "nan.ply", strict), "nan.ply: line 9: vertex 1 has a coordinate that is not a finite number");
   EXPECT_ERROR(parse_ply(head + "property float z\nend_header\n1 2 3 4\n1 2 3\n", "extra.ply"), "extra.ply: line 8: 'vertex' 0: 1 values more");
   EXPECT_ERROR(parse_ply(head + "property quaternion z\nend_header\n", "type.ply"), "type.ply: line 6: unknown property type 'quaternion'");
   EXPECT_ERROR(parse_ply("ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty double x\nproperty double y\nproperty double z\nend_header\n" +
@@ -171,6 +173,87 @@ TEST(CloudReader, TruncationsOfAValidFileNeverCrash) {
   }
   EXPECT_EQ(errors, static_cast<int>(full.size()));
   EXPECT_EQ(parse_cloud(full, "full.ply").size(), 20u);
+}
+
+// Issue 44: a PLY whose header counts the vertices wrong, either way, is refused naming where; the
+// scanner's "no return" points (NaN, Inf) are dropped and counted unless asked to be errors.
+TEST(CloudReader, VertexCountsThatDoNotMatchTheDataAreErrorsBothWays) {
+  const PointCloud c = random_cloud(20, 3, false);
+  for (const bool binary : {false, true}) {
+    const std::string bytes = ply_bytes(c, {}, binary);
+    const auto count_at = bytes.find("element vertex 20");
+    ASSERT_NE(count_at, std::string::npos);
+    std::string fewer = bytes, more = bytes;
+    fewer.replace(count_at, 17, "element vertex 19");  // declares 19 of the 20 points the file holds
+    more.replace(count_at, 17, "element vertex 21");   // declares one point the file does not hold
+    const std::string short_count = error_of([&] { parse_ply(fewer, "fewer.ply"); });
+    EXPECT_NE(short_count.find("fewer.ply: "), std::string::npos) << short_count;
+    EXPECT_NE(short_count.find("after the 19 vertices the header declares (line 4)"), std::string::npos) << short_count;
+    if (!binary) { EXPECT_NE(short_count.find("line " + std::to_string(std::count(bytes.begin(), bytes.end(), '\n'))), std::string::npos) << short_count; }
+    const std::string long_count = error_of([&] { parse_ply(more, "more.ply"); });
+    EXPECT_NE(long_count.find("more.ply: "), std::string::npos) << long_count;
+    EXPECT_NE(long_count.find(binary ? "21 vertices of at least 24 bytes declared, but only 480 bytes follow the header" : "the data ends after 20 of the 21 'vertex' elements"),
+              std::string::npos)
+        << long_count;
+    EXPECT_EQ(parse_ply(bytes, "right.ply").size(), 20u);
+  }
+}
+
+TEST(CloudReader, PointsThatAreNotFiniteAreDroppedAndCounted) {
+  const PointCloud xyz = parse_xyz("1 2 3\n4 nan 6\n7 8 9\ninf 0 0\n", "scan.xyz");
+  ASSERT_EQ(xyz.size(), 2u);
+  EXPECT_EQ(xyz.points[1], Eigen::Vector3d(7, 8, 9));
+  EXPECT_EQ(xyz.dropped.not_finite, 2u);
+  EXPECT_NE(xyz.dropped.first_not_finite.find("scan.xyz: line 2: column 2: 'nan' is not a finite number"), std::string::npos) << xyz.dropped.first_not_finite;
+  PointCloud c = random_cloud(30, 4, true);
+  c.points[7].y() = std::numeric_limits<double>::quiet_NaN();
+  c.normals[12].z() = std::numeric_limits<double>::infinity();
+  for (const bool binary : {false, true}) {
+    const PointCloud back = parse_ply(ply_bytes(c, {}, binary), "scan.ply");
+    ASSERT_EQ(back.size(), 28u);
+    EXPECT_EQ(back.dropped.not_finite, 2u);
+    EXPECT_EQ(back.points[7], c.points[8]);
+    EXPECT_NE(back.dropped.first_not_finite.find("vertex 7 has a coordinate that is not a finite number"), std::string::npos) << back.dropped.first_not_finite;
+    const std::string strict = error_of([&] { parse_ply(ply_bytes(c, {}, binary), "scan.ply", {.not_finite_is_error = true}); });
+    EXPECT_NE(strict.find("vertex 7 has a coordinate that is not a finite number"), std::string::npos) << strict;
+  }
+}
+
+// The far-outlier rule (geometry/cloud_outliers.hpp) on clouds it was not tuned to: a regular grid
+// (its MAD is 0: the floor of ten spacings must keep its edges and corners), noisy random samples of a
+// sphere and of a bumpy sheet at several densities; then the same clouds with stray points added
+// metres away and two part widths aside.
+TEST(CloudOutliers, StrayPointsFarFromTheScanAreFoundAndNothingElse) {
+  std::mt19937 rng(44);
+  std::normal_distribution<double> noise(0, 0.02);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<PointCloud> clouds;
+  PointCloud grid;
+  for (int i = 0; i < 60; ++i)
+    for (int j = 0; j < 40; ++j) grid.points.emplace_back(0.5 * i, 0.5 * j, 0);
+  clouds.push_back(grid);
+  for (const int n : {2000, 20000}) {
+    PointCloud sphere, sheet;
+    for (int k = 0; k < n; ++k) {
+      const double z = 2 * u(rng) - 1, phi = 2 * std::acos(-1.0) * u(rng), r = std::sqrt(1 - z * z);
+      sphere.points.push_back((40 + noise(rng)) * Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z));
+      const double x = 200 * u(rng), y = 120 * u(rng);
+      sheet.points.emplace_back(x, y, 5 * std::sin(x / 15) * std::cos(y / 20) + noise(rng));
+    }
+    clouds.push_back(sphere);
+    clouds.push_back(sheet);
+  }
+  for (PointCloud& cloud : clouds) {
+    EXPECT_TRUE(find_far_outliers(cloud).indices.empty()) << cloud.size() << " points";
+    const std::size_t n = cloud.size();
+    const Box3 box = bounding_box(cloud.points);
+    cloud.points.push_back(box.hi + Eigen::Vector3d(0, 0, 5000));                    // 5 m above the part
+    cloud.points.push_back(box.centre() + Eigen::Vector3d(3 * box.size().x(), 0, 0));  // two part widths aside
+    const FarOutliers found = find_far_outliers(cloud);
+    EXPECT_EQ(found.indices, (std::vector<std::size_t>{n, n + 1})) << n << " points: threshold " << found.threshold_mm << " mm, spacing " << found.median_mm;
+    remove_points(cloud, found.indices);
+    EXPECT_EQ(cloud.size(), n);
+  }
 }
 
 TEST(PointCloud, FrameAlongTurnsTheAxisOntoZ) {

@@ -46,8 +46,8 @@ TEST(GCode, RejectsBadProgramsNamingTheLine) {
   EXPECT_NE(error_of("G0 X0 Y0 Z0\nG1 X5\n").find("prog.nc:2: cutting move (G1) without a feed rate"), std::string::npos);
   EXPECT_NE(error_of("G0 X0 Y0 Z0\nG2 X10 Y0 I4 J0 F100\n").find("prog.nc:2: arc radius is inconsistent: 4.0000 mm at the start, 6.0000 mm at the end"),
             std::string::npos);
-  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG1 X10 A30 F100\n").find("prog.nc:2: a 3-axis pocket program moves no rotary axis"), std::string::npos);
-  EXPECT_NE(error_of("G21\nG1 X10 F100\n").find("prog.nc:2: first move must be a G0"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG1 X10 A30 F100\nM2\n").find("prog.nc:2: a 3-axis pocket program moves no rotary axis"), std::string::npos);
+  EXPECT_NE(error_of("G21\nG1 X10 F100\nM2\n").find("prog.nc:2: first move must be a G0"), std::string::npos);
   EXPECT_NE(error_of("G0 X0 Y0 Z0\nG2 X10 Y0 R2 F100\n").find("prog.nc:2: arc radius R"), std::string::npos);
   EXPECT_NE(error_of("X1 Y2\n").find("prog.nc:1: axis words before any motion mode"), std::string::npos);
   EXPECT_NE(error_of("G0 X0 (unclosed\n").find("prog.nc:1: unclosed comment"), std::string::npos);
@@ -63,7 +63,7 @@ TEST(GCode, RejectsBadProgramsNamingTheLine) {
 }
 
 TEST(GCode, ArcsOutOfTheXyPlaneBecomeChordsAndCannedCyclesAreRead) {
-  const auto path = parse_gcode("G21 G90\nG0 X0 Y0 Z0\nG18 G2 X10 Z0 I5 K0 F600\n", "xz.nc");
+  const auto path = parse_gcode("G21 G90\nG0 X0 Y0 Z0\nG18 G2 X10 Z0 I5 K0 F600\nM2\n", "xz.nc");
   ASSERT_GT(path.moves.size(), 20u);
   double longest = 0;
   for (std::size_t k = 1; k < path.moves.size(); ++k) {
@@ -93,7 +93,7 @@ TEST(GCode, HostileProgramsAreAClearErrorNotUndefinedBehaviourNorABoundlessPath)
   // A byte that is not text is named by its code (and no interpreter is asked about it).
   EXPECT_NE(error_of(std::string("G0 X0\n\x01G1\n", 10)).find("prog.nc:2: expected a word letter, got '\\x01'"), std::string::npos);
   // 10^4 turns of an XZ circle of 0.9 km, in 1 um chords: 6.7e8 moves refused before one is made.
-  const std::string helix = error_of("G0 X0 Y0 Z0\nG18 G2 X0 Z0 I900000 K0 P10000 F100\n");
+  const std::string helix = error_of("G0 X0 Y0 Z0\nG18 G2 X0 Z0 I900000 K0 P10000 F100\nM2\n");
   EXPECT_NE(helix.find("prog.nc:2: the program's moves (arcs split into turns and chords) pass 2000000"), std::string::npos) << helix;
 }
 

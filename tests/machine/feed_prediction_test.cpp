@@ -197,6 +197,7 @@ TEST(FeedPrediction, ShortBlocksAreCappedByTheInterpolationCycle) {
     std::snprintf(block, sizeof block, "X%.2f\n", 0.02 * i);
     program += block;
   }
+  program += "M2\n";
   const FeedPrediction p = predict(program, m);
   const double cap = 0.02 / m.interpolation_cycle;  // 20 mm/s, below the programmed 100 mm/s
   for (std::size_t i = 0; i < p.blocks.size(); ++i)

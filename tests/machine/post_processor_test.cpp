@@ -2,13 +2,16 @@
 // the very moves it wrote, on every shipped machine; unreachable CL data refused with its line.
 #include "machine/post_processor.hpp"
 #include "machine/program_reader.hpp"
+#include "shop_safe_program.hpp"
 #include "support/input_error.hpp"
 
+#include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <vector>
 
 using namespace drom;
 using namespace drom::machine;
@@ -50,24 +53,52 @@ TEST_P(PostProcessor, LinuxCncReadsBackTheMovesWritten) {
   const ClProgram cl = random_cl(m, 42, 400);
   const ClOnMachine on = cl_to_machine_program(cl, kin);
   ASSERT_TRUE(on.joints.violations.empty());
-  const std::string gcode = post_process(cl, kin, {"round trip", 1, 12000, -1});
+  const std::string gcode = post_process(cl, kin, {.title = "round trip", .tool = 1, .spindle_speed = 12000});
+  // Issue 44: ready to run as it is (tests/machine/shop_safe_program.hpp).
+  shop_safe::expect_shop_safe(gcode, m.name + ".ngc");
   for (ReaderChoice reader : {ReaderChoice::Rs274, ReaderChoice::Plain}) {
     const MachineProgram back = to_machine_program(parse_program(gcode, m.name + ".ngc", {reader, {}}), m);
-    // The written program adds its first rapid (from where the tool is) in front.
-    ASSERT_EQ(back.blocks.size(), on.program.blocks.size() + 1);
-    for (std::size_t i = 0; i < on.program.blocks.size(); ++i) {
-      const MachineBlock &a = on.program.blocks[i], &b = back.blocks[i + 1];
+    // The cuts come back one for one, each from where the CL data starts it; the rapids between them
+    // are the safe moves (up, across, down), so only where they end is compared.
+    std::vector<const MachineBlock*> written, read;
+    for (const MachineBlock& b : on.program.blocks)
+      if (b.type != MoveType::Rapid) written.push_back(&b);
+    for (const MachineBlock& b : back.blocks)
+      if (b.type != MoveType::Rapid) read.push_back(&b);
+    ASSERT_EQ(read.size(), written.size());
+    for (std::size_t i = 0; i < written.size(); ++i) {
+      const MachineBlock &a = *written[i], &b = *read[i];
       EXPECT_EQ(static_cast<int>(a.type), static_cast<int>(b.type)) << i;
-      for (int j = 0; j < m.joint_count(); ++j)
-        EXPECT_NEAR(joint_in_program_units(m, j, a.end[j]), joint_in_program_units(m, j, b.end[j]), 1e-4) << GetParam() << " block " << i << " joint " << j;
+      for (int j = 0; j < m.joint_count(); ++j) {
+        EXPECT_NEAR(joint_in_program_units(m, j, a.end[j]), joint_in_program_units(m, j, b.end[j]), 1e-4) << GetParam() << " cut " << i << " joint " << j;
+        EXPECT_NEAR(joint_in_program_units(m, j, a.start[j]), joint_in_program_units(m, j, b.start[j]), 1e-4) << GetParam() << " cut " << i << " joint " << j;
+      }
       if (a.type == MoveType::Linear) {
         // 3-axis feeds are per length, and the length read back carries the coordinates' 4 decimals.
         const double length = (a.end.head<3>() - a.start.head<3>()).norm();
         const double relative = m.rotary_count() > 0 ? 1e-5 : 2e-4 / std::max(length, 1e-3) + 1e-5;
-        EXPECT_NEAR(a.programmed_duration, b.programmed_duration, relative * a.programmed_duration) << GetParam() << " block " << i;
+        EXPECT_NEAR(a.programmed_duration, b.programmed_duration, relative * a.programmed_duration) << GetParam() << " cut " << i;
       }
     }
   }
+}
+
+// The checker above fails the programs drom posted before issue 44: no spindle, a first rapid in X, Y
+// and Z together down over the part, rotary axes turned low, no M5.
+TEST(ShopSafeCheck, RefusesTheProgramsPostedBeforeIssue44) {
+  const std::string before =
+      "%\n(old)\nG21 G90 G17 G40 G94 G64 P0.0100\nT1 M6\nG43 H1\nG0 X0.0000 Y0.0000 Z2.7700 A0.0000 C0.0000\nG93 G1 X10.0000 Y0.0000 Z2.0000 A0.0000 C0.0000 F60\n"
+      "G94 G0 X10.0000 Y0.0000 Z7.0000 A10.0000 C5.0000\nG0 X50.0000 Y0.0000 Z2.2000\nG93 G1 X60.0000 Y0.0000 Z2.5000 A10.0000 C5.0000 F60\nG94\nM30\n%\n";
+  ::testing::TestPartResultArray failures;
+  {
+    ::testing::ScopedFakeTestPartResultReporter reporter(::testing::ScopedFakeTestPartResultReporter::INTERCEPT_ONLY_CURRENT_THREAD, &failures);
+    shop_safe::expect_shop_safe(before, "old.ngc");
+  }
+  std::string all;
+  for (int i = 0; i < failures.size(); ++i) all += std::string(failures.GetTestPartResult(i).message()) + "\n";
+  for (const char* expected : {"G54", "the first move is not a retract in Z alone", "cuts before the spindle starts", "a rotary axis turns off the safe height",
+                               "a rapid in X/Y at Z 2.2", "below the highest cut 2.5", "no M5 after the cuts"})
+    EXPECT_NE(all.find(expected), std::string::npos) << expected << " not found in:\n" << all;
 }
 
 INSTANTIATE_TEST_SUITE_P(Machines, PostProcessor, ::testing::Values("vmc_3axis", "ucp710_like", "gantry_head_ac"));

@@ -168,7 +168,7 @@ TEST(ProgramReader, BadProgramsNameTheirLine) {
     return std::string();
   };
   EXPECT_NE(message("G21\nG0 X0\nG1 X5\n").find("bad.ngc:3"), std::string::npos);                       // no feed
-  EXPECT_TRUE(parse_program("G21\nG1 X5 F100\n", "first.ngc").start_assumed);  // cutting first: from the origin, said
+  EXPECT_TRUE(parse_program("G21\nG1 X5 F100\nM2\n", "first.ngc").start_assumed);  // cutting first: from the origin, said
   EXPECT_NE(message("G0 X0 Y0\nG2 X10 Y0 I3 J0 F100\n").find("inconsistent"), std::string::npos);       // radius
   EXPECT_NE(message("G0 X0\nG1 X1 X2 F10\n").find("twice"), std::string::npos);
   EXPECT_NE(message("G0 X0\nG93 G1 X1 F10\nG1 X2\n").find("bad.ngc:3"), std::string::npos);             // G93 without F
@@ -244,7 +244,7 @@ TEST(ProgramReader, HostileInterpreterOutputIsAClearErrorNamingTheProgram) {
 }
 
 TEST(ProgramReader, RotaryWordsOnAThreeAxisMachineNameTheLine) {
-  const NcProgram p = parse_plain_gcode("G21 G90\nG0 X0 Y0 Z5\nG1 X10 F100\nG1 X20 A30\n", "five.ngc");
+  const NcProgram p = parse_plain_gcode("G21 G90\nG0 X0 Y0 Z5\nG1 X10 F100\nG1 X20 A30\nM2\n", "five.ngc");
   try {
     to_machine_program(p, load_machine("vmc_3axis"));
     FAIL();
@@ -254,5 +254,5 @@ TEST(ProgramReader, RotaryWordsOnAThreeAxisMachineNameTheLine) {
     EXPECT_NE(m.find("no rotary axis"), std::string::npos) << m;
   }
   EXPECT_NO_THROW(to_machine_program(p, load_machine("ucp710_like")));
-  EXPECT_THROW(to_machine_program(parse_plain_gcode("G0 X0\nG1 B5 F10\n", "b.ngc"), load_machine("ucp710_like")), InputError);
+  EXPECT_THROW(to_machine_program(parse_plain_gcode("G0 X0\nG1 B5 F10\nM2\n", "b.ngc"), load_machine("ucp710_like")), InputError);
 }

@@ -53,9 +53,18 @@ def test_the_post_processor_writes_what_linuxcnc_reads(tmp_path):
     m = drom.machine.load("ucp710_like")
     program = drom.machine.post(m, saddle_pass(3, step=1.0), "saddle")
     assert "G93" in program and " A" in program and " C" in program
+    # Ready to run: the spindle started (300 m/min on a 10 mm tool: 9 500 rev/min), the first move a
+    # retract in Z alone, the end M5 M30 %.
+    drilled = drom.machine.post(m, saddle_pass(3, step=1.0), "saddle", tool=4, tool_diameter=10.0)
+    lines = drilled.splitlines()
+    assert "T4 M6" in lines and "S9500 M3" in lines and lines[-3:] == ["M5", "M30", "%"]
+    first_move = next(line for line in lines if line.startswith("G0"))
+    assert first_move.split()[1:] == [first_move.split()[1]] and first_move.split()[1].startswith("Z")
     path = tmp_path / "saddle.ngc"
     path.write_text(program)
     s = drom.machine.check_program(path, "ucp710_like", tmp_path / "out")
-    assert s["blocks"] == 61 and s["travel_violations"] == []
+    # The pass's 60 CL points (a rapid to the first, 59 cuts), led in by the safe start (Z up, A and C,
+    # X and Y, Z down) and closed by the retract: 65 blocks.
+    assert s["blocks"] == 65 and s["travel_violations"] == []
     with pytest.raises(drom.InputError, match="no rotary axis"):
         drom.machine.check_program(path, "vmc_3axis", tmp_path / "out3")

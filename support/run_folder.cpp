@@ -1,0 +1,126 @@
+#include "support/run_folder.hpp"
+
+#include "support/input_error.hpp"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+#include <system_error>
+
+namespace drom {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path normalized(const fs::path& out) {
+  fs::path p = fs::absolute(out).lexically_normal();
+  if (!p.has_filename()) p = p.parent_path();  // a trailing '/'
+  const std::string name = p.filename().string();
+  if (name.empty() || name == "." || name == ".." || p == p.root_path())
+    throw InputError("--out '" + out.string() + "': expected a folder of its own (not the root, '.' or '..')");
+  return p;
+}
+
+// Hidden siblings of `out`: ".<name><suffix>" (built by appends: GCC 12's -Wrestrict misreads "." + s once inlined).
+fs::path hidden_sibling(const fs::path& out, const char* suffix) {
+  std::string name = ".";
+  name += out.filename().string();
+  name += suffix;
+  return out.parent_path() / name;
+}
+
+fs::path discarded_folder(const fs::path& out) { return hidden_sibling(out, ".discarded"); }
+
+void remove_quietly(const fs::path& p) {
+  std::error_code ec;
+  fs::remove_all(p, ec);
+}
+
+}  // namespace
+
+fs::path partial_folder(const fs::path& out) {
+  const fs::path p = normalized(out);
+  return p.parent_path() / (p.filename().string() + ".partial");
+}
+
+RunFolder::RunFolder(fs::path out, const RunFolderOptions& options) : out_(normalized(out)), staging_(partial_folder(out_)) {
+  const std::string shown = out.string();
+  std::error_code ec;
+  if (fs::exists(out_, ec) && !fs::is_directory(out_, ec)) throw InputError("--out " + shown + ": a file is there, not a folder");
+  fs::create_directories(out_.parent_path(), ec);
+  if (ec) throw InputError("--out " + shown + ": cannot create the folder " + out_.parent_path().string() + ": " + ec.message());
+
+  lock_path_ = hidden_sibling(out_, ".lock");
+  lock_fd_ = ::open(lock_path_.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
+  if (lock_fd_ < 0) throw InputError("--out " + shown + ": cannot write in " + out_.parent_path().string() + ": " + std::strerror(errno));
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    throw InputError("--out " + shown + ": another drom is writing this folder now (it holds " + lock_path_.string() + ")");
+  }
+  remove_quietly(discarded_folder(out_));  // what a commit killed halfway left
+
+  if (options.resume && fs::is_directory(staging_, ec)) {
+    resumed_partial_ = true;
+  } else {
+    fs::remove_all(staging_, ec);
+    if (ec) throw InputError("--out " + shown + ": cannot clear " + staging_.string() + ", a failed run's folder: " + ec.message());
+    fs::create_directory(staging_, ec);
+    if (ec) throw InputError("--out " + shown + ": cannot create " + staging_.string() + ": " + ec.message());
+    if (options.resume && fs::is_directory(out_, ec))
+      for (const auto& entry : options.reused) {
+        const fs::path from = out_ / entry, to = staging_ / entry;
+        if (!fs::exists(from, ec)) continue;
+        fs::create_directories(to.parent_path(), ec);
+        fs::copy(from, to, fs::copy_options::recursive | fs::copy_options::create_hard_links, ec);
+        if (ec) throw InputError("--out " + shown + ": cannot reuse " + from.string() + ": " + ec.message());
+      }
+  }
+  // A folder that exists but refuses files (read-only, full) is found now, not after the work.
+  const fs::path probe = staging_ / ".write_probe";
+  {
+    std::ofstream f(probe);
+    f << "drom\n";
+    f.flush();
+    if (!f) throw InputError("--out " + shown + ": cannot write in " + staging_.string() + ": " + std::strerror(errno));
+  }
+  fs::remove(probe, ec);
+}
+
+RunFolder::~RunFolder() {
+  if (lock_fd_ >= 0) ::close(lock_fd_);
+}
+
+void RunFolder::commit() {
+  if (committed_) return;
+  auto fail = [&](const std::string& what) { throw std::runtime_error("cannot put " + staging_.string() + " in place of " + out_.string() + ": " + what); };
+  std::error_code ec;
+  if (fs::exists(out_, ec)) {
+    // One atomic swap when the file system has it; else two renames with the old run set aside first.
+    if (::renameat2(AT_FDCWD, staging_.c_str(), AT_FDCWD, out_.c_str(), RENAME_EXCHANGE) == 0) {
+      fs::rename(staging_, discarded_folder(out_), ec);
+      if (ec) fail(ec.message());
+    } else if (errno == EINVAL || errno == ENOSYS || errno == ENOTSUP) {
+      fs::rename(out_, discarded_folder(out_), ec);
+      if (ec) fail(ec.message());
+      fs::rename(staging_, out_, ec);
+      if (ec) fail(ec.message());
+    } else {
+      fail(std::strerror(errno));
+    }
+    remove_quietly(discarded_folder(out_));
+  } else {
+    fs::rename(staging_, out_, ec);
+    if (ec) fail(ec.message());
+  }
+  committed_ = true;
+}
+
+}  // namespace drom

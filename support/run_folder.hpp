@@ -1,0 +1,49 @@
+#pragma once
+// A run's output folder, owned by the run from start to end. The run writes into a staging folder
+// beside it, `<out>.partial`, and commit() swaps that in for `<out>` in one rename (Linux's
+// renameat2 RENAME_EXCHANGE), then deletes what was there. So:
+// - a run killed or failed midway leaves `<out>` as the last complete run left it, and its own work
+//   in `<out>.partial`, a folder whose name says what it is;
+// - nothing of an earlier run survives beside a new one: `<out>` is always one run's files;
+// - only `--resume` reuses earlier work: the `.partial` folder of a killed run as it is, or else the
+//   entries of `<out>` the command names (hard links, so nothing is copied), nothing more.
+// The constructor checks, before any long work, that the folder can be made and written, and that no
+// other drom is writing it (an advisory lock beside it).
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace drom {
+
+struct RunFolderOptions {
+  bool resume = false;
+  // With resume and no `.partial` folder: the entries of the last complete run that the run reuses
+  // (relative paths, e.g. "optimization"); the others are not carried over.
+  std::vector<std::string> reused;
+};
+
+class RunFolder {
+ public:
+  explicit RunFolder(std::filesystem::path out, const RunFolderOptions& options = {});
+  ~RunFolder();
+  RunFolder(const RunFolder&) = delete;
+  RunFolder& operator=(const RunFolder&) = delete;
+
+  // Where the run writes (the staging folder), and where its files are once committed.
+  const std::filesystem::path& staging() const { return staging_; }
+  const std::filesystem::path& out() const { return out_; }
+  // True when the run took over a killed run's `.partial` folder (resume only).
+  bool resumed_partial() const { return resumed_partial_; }
+  // Swaps the staging folder in for `out`. Throws std::runtime_error with the system's reason.
+  void commit();
+
+ private:
+  std::filesystem::path out_, staging_, lock_path_;
+  int lock_fd_ = -1;
+  bool resumed_partial_ = false, committed_ = false;
+};
+
+// The staging folder of `out`: `<out>.partial`.
+std::filesystem::path partial_folder(const std::filesystem::path& out);
+
+}  // namespace drom
