@@ -32,6 +32,9 @@ FarOutliers find_far_outliers(const PointCloud& cloud, const FarOutlierRule& rul
     dk[static_cast<std::size_t>(i)] = std::sqrt(squared.back());
   }
   out.median_mm = median_of(dk);
+  // Most points stacked on others (a scan saved twice, a grid written nine times over): there is no
+  // spacing to measure distance in, and no point is called an outlier.
+  if (!(out.median_mm > 0)) return out;
   std::vector<double> deviation(n);
   for (std::size_t i = 0; i < n; ++i) deviation[i] = std::abs(dk[i] - out.median_mm);
   const double mad = median_of(std::move(deviation));

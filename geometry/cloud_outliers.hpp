@@ -9,6 +9,8 @@
 // points. The median and MAD are robust to the outliers themselves; the floor of ten spacings keeps a
 // regular grid (MAD near 0) from losing its edge and corner points (their d8 is at most about twice the
 // median). What the rule cannot see: a cluster of nine or more stray points, which is a surface.
+// A cloud of 9 points or fewer, or one where most points are stacked on others (median d8 = 0), has
+// no spacing to measure against: no point is called an outlier.
 #include "geometry/point_cloud.hpp"
 
 #include <cstddef>

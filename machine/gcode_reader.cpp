@@ -113,7 +113,7 @@ NcProgram parse_plain_gcode(const std::string& text, const std::string& origin) 
       opened_with_percent = true;
       continue;
     }
-    anything_before = anything_before || first != std::string::npos;
+    anything_before = anything_before || raw.find_first_not_of(" \t\r") != std::string::npos;  // a comment too: LinuxCNC then refuses the '%'
     std::map<char, double> words;
     std::vector<int> g_codes, m_codes;
     std::size_t i = 0;

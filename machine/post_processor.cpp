@@ -18,9 +18,16 @@ double default_spindle_speed(double tool_diameter) {
 
 double spindle_speed(const PostOptions& options) { return options.spindle_speed > 0 ? options.spindle_speed : default_spindle_speed(options.tool_diameter); }
 
+// Text inside a G-code comment: no parentheses (a comment does not nest) and no line breaks.
+std::string comment_text(const std::string& text) {
+  std::string out;
+  for (const char c : text) out += c == '(' ? '[' : c == ')' ? ']' : static_cast<unsigned char>(c) < 0x20 ? ' ' : c;
+  return out;
+}
+
 std::string program_header(const PostOptions& options, const std::string& modal_line, const std::string& tool_length_line, const std::string& comments) {
   char buf[160];
-  std::string out = "%\n(" + options.title + ")\n" + comments;
+  std::string out = "%\n(" + comment_text(options.title) + ")\n" + comments;
   out += "G21 G90 G17 G40 G94 G54" + (modal_line.empty() ? std::string() : " " + modal_line) + "\n";
   std::snprintf(buf, sizeof buf, "T%d M6\n", options.tool);
   out += buf;
@@ -39,7 +46,7 @@ std::string write_machine_gcode(const MachineProgram& program, const Machine& m,
   const bool five_axis = m.rotary_count() > 0;
   const bool head = m.chain == KinematicChain::HeadHead || m.chain == KinematicChain::TableHead;
   const double tolerance = options.blend_tolerance >= 0 ? options.blend_tolerance : m.junction_tolerance;
-  std::snprintf(buf, sizeof buf, "(machine %s: %s%s%s; written by drom's post-processor)\n", m.name.c_str(), chain_name(m.chain), five_axis ? ", rotary axes " : "",
+  std::snprintf(buf, sizeof buf, "(machine %s: %s%s%s; written by drom's post-processor)\n", comment_text(m.name).c_str(), chain_name(m.chain), five_axis ? ", rotary axes " : "",
                 m.rotary_letters().c_str());
   std::string comments = buf;
   comments += head ? "(X Y Z: the head's pivot, tool length included; A B C in degrees)\n" : "(X Y Z: the tool tip, tool length by G43)\n";
@@ -61,11 +68,14 @@ std::string write_machine_gcode(const MachineProgram& program, const Machine& m,
   // The clearance plane: above every point of the program, below the safe height.
   double highest = -std::numeric_limits<double>::infinity();
   for (const MachineBlock& b : program.blocks) highest = std::max({highest, b.start[2], b.end[2]});
+  if (highest > m.safe_z)
+    throw InputError(program.origin + ": the program reaches Z " + std::to_string(highest) + ", above the machine's safe height (setup.safe_z = " +
+                     std::to_string(m.safe_z) + " in " + m.origin + "): no height is safe to turn the rotary axes at");
   const double plane = std::min(m.safe_z, highest + options.clearance);
 
   bool inverse_time = false;
   double feed = -1;
-  Joints at = Joints::Zero(nj);
+  Joints at = Joints::Zero();
   bool known = false;  // where the machine stands before the first move is not known
   auto g0 = [&](const std::string& axes) {
     out += (inverse_time ? "G94 G0" : "G0") + axes + "\n";

@@ -44,6 +44,8 @@ double default_spindle_speed(double tool_diameter);
 double spindle_speed(const PostOptions& options);
 // The header's lines (from '%' to the spindle and coolant), and the end (M5 M9 M30 %).
 std::string program_header(const PostOptions& options, const std::string& modal_line, const std::string& tool_length_line, const std::string& comments = {});
+// `text` made fit for a G-code comment: '(' and ')' become '[' and ']', control characters spaces.
+std::string comment_text(const std::string& text);
 std::string program_end(const PostOptions& options);
 
 std::string post_process(const ClProgram& cl, const Kinematics& kinematics, const PostOptions& options = {});

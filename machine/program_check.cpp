@@ -110,13 +110,13 @@ nlohmann::json check_program(const ProgramCheckOptions& o) {
   const Machine m = load_machine(o.machine, o.machine_overrides);
   const Kinematics kin(m);
   if (!is_cl_file(o.program) && is_subroutine_file(o.program)) {
-    RunFolder folder(o.out);
+    RunFolder folder(o.out, {.resume = false, .reused = {}, .inputs = {o.program}});
     return report_no_motion(o, folder, m, "drom", seconds_since(start), start, "a subroutine file: its moves run where a program calls it");
   }
   Loaded loaded = load(o, kin);
   const MachineProgram& program = loaded.program;
   const double read_s = seconds_since(start);
-  RunFolder folder(o.out);  // before the prediction: an output folder that cannot be written is found now
+  RunFolder folder(o.out, {.resume = false, .reused = {}, .inputs = {o.program}});  // before the prediction: an output folder that cannot be written is found now
   if (program.blocks.empty()) return report_no_motion(o, folder, m, loaded.reader, read_s, start);
 
   // Travel per block end, and passages near the singular direction.

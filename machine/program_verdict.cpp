@@ -13,36 +13,56 @@ namespace drom::machine {
 
 namespace {
 
-// The worst demand along one run of consecutive cutting blocks (indices into program.blocks).
+// The worst demand along one run of consecutive cutting blocks (indices into program.blocks): the
+// joints, linear in time between block ends at the programmed feeds, sampled every `h` seconds, then
+// central differences. h is ten interpolation cycles: the NC cannot follow a demand on a shorter
+// scale anyway (it smooths over its look-ahead), and the positions' printed rounding (1e-4 mm or
+// degree) would otherwise pass for acceleration and jerk on short blocks.
 void judge_run(const MachineProgram& program, const std::vector<std::size_t>& run, const Kinematics& kin, ProgramVerdict& v) {
   const Machine& m = kin.machine();
-  const std::size_t n = run.size() + 1;  // the run's start, then every block's end
-  std::vector<Joints> q(n);
-  std::vector<double> t(n, 0.0);  // time along the run at the programmed feeds
-  std::vector<int> line(n, 0);
+  const std::size_t ends = run.size() + 1;  // the run's start, then every block's end
+  std::vector<Joints> q(ends);
+  std::vector<double> t(ends, 0.0);
   q[0] = program.blocks[run.front()].start;
-  line[0] = program.blocks[run.front()].line;
   for (std::size_t k = 0; k < run.size(); ++k) {
     const MachineBlock& b = program.blocks[run[k]];
     q[k + 1] = b.end;
     t[k + 1] = t[k] + b.programmed_duration;
-    line[k + 1] = b.line;
   }
+  const double h = 10 * m.interpolation_cycle;
+  const std::size_t n = static_cast<std::size_t>(std::ceil(t.back() / h)) + 1;
   if (n < 2) return;
+  std::vector<Joints> samples(n);
+  std::vector<int> line(n, 0);
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ti = std::min(t.back(), static_cast<double>(i) * h);
+    while (k + 2 < ends && t[k + 1] < ti) ++k;
+    const double span = t[k + 1] - t[k], f = span > 0 ? std::clamp((ti - t[k]) / span, 0.0, 1.0) : 1.0;
+    samples[i] = q[k] + f * (q[k + 1] - q[k]);
+    line[i] = program.blocks[run[k]].line;
+  }
   auto diff = [&](const std::vector<Joints>& x) {
-    std::vector<Joints> d(n, Joints::Zero(m.joint_count()));
+    std::vector<Joints> d(n, Joints::Zero());
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t lo = i == 0 ? 0 : i - 1, hi = std::min(i + 1, n - 1);
-      if (t[hi] > t[lo]) d[i] = (x[hi] - x[lo]) / (t[hi] - t[lo]);
+      d[i] = (x[hi] - x[lo]) / (static_cast<double>(hi - lo) * h);
     }
     return d;
   };
-  const std::vector<Joints> vel = diff(q), acc = diff(vel), jerk = diff(acc);
+  const std::vector<Joints> vel = diff(samples), acc = diff(vel), jerk = diff(acc);
   AxisDemand* demand[3] = {&v.velocity, &v.acceleration, &v.jerk};
   const std::vector<Joints>* derivative[3] = {&vel, &acc, &jerk};
   for (int j = 0; j < m.joint_count(); ++j) {
     const double limit[3] = {m.axes[j].velocity, m.axes[j].acceleration, m.axes[j].jerk};
-    for (int d = 0; d < 3; ++d) {
+    // Velocity block by block (a block's joints move linearly at its programmed feed): exact, and the
+    // rounding is negligible against it.
+    if (limit[0] > 0)
+      for (std::size_t b = 0; b < run.size(); ++b) {
+        const double r = std::abs(q[b + 1](j) - q[b](j)) / (t[b + 1] - t[b]) / limit[0];
+        if (t[b + 1] > t[b] && r > v.velocity.ratio) v.velocity = {r, std::string(1, m.axes[j].name), program.blocks[run[b]].line};
+      }
+    for (int d = 1; d < 3; ++d) {
       if (!(limit[d] > 0)) continue;
       for (std::size_t i = 0; i < n; ++i) {
         const double r = std::abs((*derivative[d])[i](j)) / limit[d];

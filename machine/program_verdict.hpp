@@ -4,11 +4,11 @@
 // tool axis pass near the singular direction, how hard does it ask the axes at its programmed feed,
 // and what feed and cycle time the machine really reaches (feed_prediction.hpp).
 //
-// The demand. Along each run of cutting blocks, the joints at the block ends q(s) against the tool
-// tip's travel s, at the block's programmed feed v: velocity q' v, acceleration q'' v², jerk q''' v³ by
-// central differences over the block ends (as paths/orient measures its rotary axes), each against the
-// axis's limit. A ratio above 1 means the controller must slow the tool below the programmed feed
-// there; the feed prediction says by how much.
+// The demand. Along each run of cutting blocks at the programmed feeds: the velocity block by block
+// (the joints move linearly over a block), the acceleration and jerk by central differences on the
+// joints sampled every ten interpolation cycles; each against the axis's limit. A ratio above 1 means the controller must
+// slow the tool below the programmed feed there; the feed prediction says by how much. The ten
+// cycles are the scale the NC acts on: a sharp corner at feed v demands about 1.4 v / (10 T_ipo).
 #include "machine/kinematics.hpp"
 
 #include <nlohmann/json.hpp>

@@ -6,6 +6,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -19,6 +20,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
+constexpr const char* kMarker = ".drom_run";  // in every folder a drom run wrote
+
 fs::path normalized(const fs::path& out) {
   fs::path p = fs::absolute(out).lexically_normal();
   if (!p.has_filename()) p = p.parent_path();  // a trailing '/'
@@ -26,6 +29,14 @@ fs::path normalized(const fs::path& out) {
   if (name.empty() || name == "." || name == ".." || p == p.root_path())
     throw InputError("--out '" + out.string() + "': expected a folder of its own (not the root, '.' or '..')");
   return p;
+}
+
+// `inner` is `outer` or lies inside it (both absolute; symbolic links resolved where they exist).
+bool inside(const fs::path& inner, const fs::path& outer) {
+  std::error_code ec;
+  const fs::path a = fs::weakly_canonical(inner, ec), b = fs::weakly_canonical(outer, ec);
+  const auto mismatch = std::mismatch(b.begin(), b.end(), a.begin(), a.end());
+  return mismatch.first == b.end();
 }
 
 // Hidden siblings of `out`: ".<name><suffix>" (built by appends: GCC 12's -Wrestrict misreads "." + s once inlined).
@@ -37,6 +48,7 @@ fs::path hidden_sibling(const fs::path& out, const char* suffix) {
 }
 
 fs::path discarded_folder(const fs::path& out) { return hidden_sibling(out, ".discarded"); }
+fs::path ready_folder(const fs::path& out) { return hidden_sibling(out, ".ready"); }
 
 void remove_quietly(const fs::path& p) {
   std::error_code ec;
@@ -54,6 +66,14 @@ RunFolder::RunFolder(fs::path out, const RunFolderOptions& options) : out_(norma
   const std::string shown = out.string();
   std::error_code ec;
   if (fs::exists(out_, ec) && !fs::is_directory(out_, ec)) throw InputError("--out " + shown + ": a file is there, not a folder");
+  // What a run may replace: a folder a drom run wrote, or an empty one; never the user's own.
+  if (inside(fs::current_path(), out_)) throw InputError("--out " + shown + ": the current folder lies in it, and a run replaces its folder whole: give a folder of its own");
+  for (const auto& input : options.inputs)
+    if (!input.empty() && inside(fs::absolute(input), out_))
+      throw InputError("--out " + shown + ": the input " + input.string() + " lies in it, and a run replaces its folder whole: give a folder of its own");
+  if (fs::is_directory(out_, ec) && !fs::exists(out_ / kMarker, ec) && !fs::is_empty(out_, ec))
+    throw InputError("--out " + shown + ": a folder of files drom did not write (no " + kMarker +
+                     "), and a run replaces its folder whole: give a new or empty folder, or one an earlier drom run wrote");
   fs::create_directories(out_.parent_path(), ec);
   if (ec) throw InputError("--out " + shown + ": cannot create the folder " + out_.parent_path().string() + ": " + ec.message());
 
@@ -65,7 +85,9 @@ RunFolder::RunFolder(fs::path out, const RunFolderOptions& options) : out_(norma
     lock_fd_ = -1;
     throw InputError("--out " + shown + ": another drom is writing this folder now (it holds " + lock_path_.string() + ")");
   }
+  ready_ = ready_folder(out_);
   remove_quietly(discarded_folder(out_));  // what a commit killed halfway left
+  remove_quietly(ready_);
 
   if (options.resume && fs::is_directory(staging_, ec)) {
     resumed_partial_ = true;
@@ -83,15 +105,14 @@ RunFolder::RunFolder(fs::path out, const RunFolderOptions& options) : out_(norma
         if (ec) throw InputError("--out " + shown + ": cannot reuse " + from.string() + ": " + ec.message());
       }
   }
-  // A folder that exists but refuses files (read-only, full) is found now, not after the work.
-  const fs::path probe = staging_ / ".write_probe";
+  // A folder that exists but refuses files (read-only, full) is found now, not after the work; the
+  // marker says, once the folder is in place, that a drom run wrote it.
   {
-    std::ofstream f(probe);
-    f << "drom\n";
+    std::ofstream f(staging_ / kMarker);
+    f << "a folder written by drom: a run replaces it whole (support/run_folder.hpp)\n";
     f.flush();
     if (!f) throw InputError("--out " + shown + ": cannot write in " + staging_.string() + ": " + std::strerror(errno));
   }
-  fs::remove(probe, ec);
 }
 
 RunFolder::~RunFolder() {
@@ -102,22 +123,26 @@ void RunFolder::commit() {
   if (committed_) return;
   auto fail = [&](const std::string& what) { throw std::runtime_error("cannot put " + staging_.string() + " in place of " + out_.string() + ": " + what); };
   std::error_code ec;
+  // The complete run leaves `.partial` first, so that `--resume` never takes a complete run (nor,
+  // after the swap, the one it replaced) for a killed one's work.
+  fs::rename(staging_, ready_, ec);
+  if (ec) fail(ec.message());
   if (fs::exists(out_, ec)) {
     // One atomic swap when the file system has it; else two renames with the old run set aside first.
-    if (::renameat2(AT_FDCWD, staging_.c_str(), AT_FDCWD, out_.c_str(), RENAME_EXCHANGE) == 0) {
-      fs::rename(staging_, discarded_folder(out_), ec);
+    if (::renameat2(AT_FDCWD, ready_.c_str(), AT_FDCWD, out_.c_str(), RENAME_EXCHANGE) == 0) {
+      fs::rename(ready_, discarded_folder(out_), ec);
       if (ec) fail(ec.message());
     } else if (errno == EINVAL || errno == ENOSYS || errno == ENOTSUP) {
       fs::rename(out_, discarded_folder(out_), ec);
       if (ec) fail(ec.message());
-      fs::rename(staging_, out_, ec);
+      fs::rename(ready_, out_, ec);
       if (ec) fail(ec.message());
     } else {
       fail(std::strerror(errno));
     }
     remove_quietly(discarded_folder(out_));
   } else {
-    fs::rename(staging_, out_, ec);
+    fs::rename(ready_, out_, ec);
     if (ec) fail(ec.message());
   }
   committed_ = true;

@@ -8,7 +8,9 @@
 // - only `--resume` reuses earlier work: the `.partial` folder of a killed run as it is, or else the
 //   entries of `<out>` the command names (hard links, so nothing is copied), nothing more.
 // The constructor checks, before any long work, that the folder can be made and written, and that no
-// other drom is writing it (an advisory lock beside it).
+// other drom is writing it (an advisory lock beside it). A folder is only ever replaced when a drom run
+// wrote it (its `.drom_run` marker) or it is empty: `--out .`, `--out ~` or a folder of the user's own
+// files is refused, as is a folder holding the current directory or one of the run's inputs.
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -20,6 +22,8 @@ struct RunFolderOptions {
   // With resume and no `.partial` folder: the entries of the last complete run that the run reuses
   // (relative paths, e.g. "optimization"); the others are not carried over.
   std::vector<std::string> reused;
+  // The run's input files: none may lie inside the folder it replaces.
+  std::vector<std::filesystem::path> inputs;
 };
 
 class RunFolder {
@@ -38,7 +42,7 @@ class RunFolder {
   void commit();
 
  private:
-  std::filesystem::path out_, staging_, lock_path_;
+  std::filesystem::path out_, staging_, ready_, lock_path_;
   int lock_fd_ = -1;
   bool resumed_partial_ = false, committed_ = false;
 };

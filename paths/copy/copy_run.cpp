@@ -208,7 +208,7 @@ nlohmann::json run_copy(const CopyRunOptions& o) {
   const machine::Kinematics kinematics(m);
   geometry::FarOutliers outliers;
   const geometry::PointCloud cloud = read_scan(o, s, outliers);
-  RunFolder folder(o.out);  // before the work: an output folder that cannot be written is found now
+  RunFolder folder(o.out, {.resume = false, .reused = {}, .inputs = {o.cloud, o.settings.value_or("")}});  // before the work: a folder that cannot be written is found now
   const auto progress = [&](const std::string& line) {
     if (!o.quiet) std::printf("  %s\n", line.c_str()), std::fflush(stdout);
   };

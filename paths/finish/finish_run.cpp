@@ -432,7 +432,7 @@ json finish_summary(const FinishCase& c, const FinishResults& r) {
 json run_finish(const FinishCase& c, const FinishRunOptions& options) {
   const auto started = std::chrono::steady_clock::now();
   const machine::Machine m = machine::load_machine(c.machine_definition);  // a wrong machine is found before the work
-  RunFolder folder(options.out, {.resume = options.resume, .reused = {"optimization"}});
+  RunFolder folder(options.out, {.resume = options.resume, .reused = {"optimization"}, .inputs = {c.origin}});
   FinishRunOptions o = options;
   o.out = folder.staging();
   const Say say = [&](const std::string& line) {

@@ -640,7 +640,7 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
   DynamicsSettings dynamics = c.dynamics;
   dynamics.singular_direction = kin.singular_direction();
   std::optional<RunFolder> folder;  // taken before the work: an output folder that cannot be written is found now
-  if (options.write_files) folder.emplace(options.out);
+  if (options.write_files) folder.emplace(options.out, RunFolderOptions{.resume = false, .reused = {}, .inputs = {c.origin}});
 
   const Precomputed pre = precompute(c, scene);
   say("drom orient: " + scene.description + "; " + std::to_string(pre.obstacles.size()) + " obstacle nodes, " + std::to_string(pre.nodes.size()) + " tool nodes, " +

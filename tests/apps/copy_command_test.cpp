@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path root() {
-  const fs::path r = fs::temp_directory_path() / "drom_copy_command";
+  const fs::path r = fs::temp_directory_path() / ("drom_copy_command_" + std::to_string(::getpid()));
   fs::create_directories(r);
   return r;
 }

@@ -16,7 +16,7 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path root() {
-  const fs::path r = fs::temp_directory_path() / "drom_machine_command";
+  const fs::path r = fs::temp_directory_path() / ("drom_machine_command_" + std::to_string(::getpid()));
   fs::create_directories(r);
   return r;
 }

@@ -37,11 +37,13 @@ TEST(OrientCommand, TheBumpsLimitRatiosAreOnTheConsoleAndItsProgramIsJudged) {
   EXPECT_GT(ratio["velocity"].get<double>(), 10);
   EXPECT_GT(ratio["acceleration"].get<double>(), 100);
   EXPECT_NE(r.output.find("rotary axes at the programmed feed, demanded over available: velocity "), std::string::npos) << r.output;
-  // The posted program's verdict: every axis, read back from the text, and the same worst velocity.
+  // The posted program's verdict: every axis, read back from the text. Its blocks ask at least the
+  // velocity orient estimates from its poses (by central differences, so smoothed over two steps).
   const auto& v = s["program_verdict"];
   EXPECT_TRUE(v["runnable"].get<bool>());
   EXPECT_TRUE(v["slows_down"].get<bool>());
-  EXPECT_NEAR(v["demand_at_programmed_feed"]["velocity"]["ratio"].get<double>(), ratio["velocity"].get<double>(), 0.05 * ratio["velocity"].get<double>());
+  EXPECT_GE(v["demand_at_programmed_feed"]["velocity"]["ratio"].get<double>(), 0.95 * ratio["velocity"].get<double>());
+  EXPECT_EQ(v["demand_at_programmed_feed"]["velocity"]["axis"], "C");
   EXPECT_GT(v["singularity_passages"].get<int>(), 0);
   EXPECT_NE(r.output.find("warning: at its programmed feed the program asks more than the machine's axes give"), std::string::npos) << r.output;
   std::ifstream in(out / "program.ngc");

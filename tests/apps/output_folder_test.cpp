@@ -50,7 +50,7 @@ std::vector<std::string> words(const std::string& line) {
 void expect_one_complete_run(const fs::path& out) {
   ASSERT_TRUE(fs::exists(out / "summary.json")) << out;
   const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
-  std::set<std::string> listed = {"summary.json"};
+  std::set<std::string> listed = {"summary.json", ".drom_run"};
   for (const auto& f : summary["files"]) listed.insert(f.get<std::string>());
   for (const auto& [name, bytes] : snapshot(out))
     if (!name.starts_with("optimization/")) {
@@ -81,10 +81,14 @@ void kill_reruns(const std::vector<std::string>& command, const fs::path& out, c
   for (const double delay : delays) {
     const auto before = snapshot(out);
     const int code = kill_after(spawn_drom(command, root() / "killed.log"), delay);
-    if (code == -SIGKILL) {
+    const auto now = snapshot(out);
+    if (code == -SIGKILL && now == before) {
       ++landed;
-      EXPECT_EQ(snapshot(out), before) << "killed after " << delay << " s: the finished folder changed";
       EXPECT_FALSE(fs::exists(partial / "summary.json")) << "killed after " << delay << " s";
+    } else if (code == -SIGKILL) {
+      // Killed after its folder was swapped in (while it deleted the one it replaced, or exited):
+      // then the folder is the new run, whole.
+      EXPECT_NE(now.at("summary.json"), before.at("summary.json")) << "killed after " << delay << " s: the folder changed, but not to a new run";
     } else {
       EXPECT_EQ(code, 0) << "after " << delay << " s";
     }
@@ -138,6 +142,39 @@ TEST(OutputFolder, KilledCopyRerunsAndFewerPacketsLeaveNoStaleFile) {
   EXPECT_TRUE(fs::exists(out / "packet_1"));
   EXPECT_FALSE(fs::exists(out / "packet_2"));
   EXPECT_FALSE(fs::exists(out.string() + ".partial"));
+  fs::remove_all(root());
+}
+
+TEST(OutputFolder, AFolderDromDidNotWriteIsNeverReplaced) {
+  fs::create_directories(root());
+  const fs::path mine = root() / "my_project";
+  fs::create_directories(mine);
+  std::ofstream(mine / "notes.txt") << "my own file\n";
+  const fs::path program = mine / "p.ngc";
+  std::ofstream(program) << "G21 G90\nG0 X0 Y0 Z5\nG1 X10 F500\nM30\n";
+  std::ofstream(root() / "elsewhere.ngc") << "G21 G90\nG0 X0 Y0 Z5\nG1 X10 F500\nM30\n";
+  // A folder of the user's files (however it is spelled), one holding the run's input, the current
+  // folder: refused, and nothing in them touched.
+  for (const std::string& out : {mine.string(), mine.string() + "/", mine.string() + "/."}) {
+    const DromResult r = run_drom("machine " + (root() / "elsewhere.ngc").string() + " --out " + out);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("a folder of files drom did not write"), std::string::npos) << r.output;
+  }
+  const DromResult input_inside = run_drom("machine " + program.string() + " --out " + mine.string());
+  EXPECT_EQ(input_inside.exit_code, 2) << input_inside.output;
+  EXPECT_TRUE(fs::exists(mine / "notes.txt"));
+  EXPECT_TRUE(fs::exists(program));
+  const auto here = fs::current_path();
+  fs::current_path(mine);
+  const DromResult dot = run_drom("machine " + (root() / "elsewhere.ngc").string() + " --out .");
+  fs::current_path(here);
+  EXPECT_EQ(dot.exit_code, 2) << dot.output;
+  EXPECT_NE(dot.output.find("the current folder lies in it"), std::string::npos) << dot.output;
+  EXPECT_TRUE(fs::exists(mine / "notes.txt"));
+  // An empty folder, or one a drom run wrote, is the run's.
+  fs::create_directories(root() / "empty");
+  EXPECT_EQ(run_drom("machine " + (root() / "elsewhere.ngc").string() + " --out " + (root() / "empty").string()).exit_code, 0);
+  EXPECT_EQ(run_drom("machine " + (root() / "elsewhere.ngc").string() + " --out " + (root() / "empty").string()).exit_code, 0);
   fs::remove_all(root());
 }
 

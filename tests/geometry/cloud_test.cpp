@@ -254,6 +254,14 @@ TEST(CloudOutliers, StrayPointsFarFromTheScanAreFoundAndNothingElse) {
     remove_points(cloud, found.indices);
     EXPECT_EQ(cloud.size(), n);
   }
+  // No spacing to measure against: a handful of points, or a grid written ten times over (median d8 = 0).
+  PointCloud few;
+  for (int k = 0; k < 6; ++k) few.points.emplace_back(k, 0, k == 5 ? 5000 : 0);
+  EXPECT_TRUE(find_far_outliers(few).indices.empty());
+  PointCloud stacked;
+  for (int copy = 0; copy < 10; ++copy) stacked.points.insert(stacked.points.end(), grid.points.begin(), grid.points.end());
+  stacked.points.emplace_back(0, 0, 5000);
+  EXPECT_TRUE(find_far_outliers(stacked).indices.empty());
 }
 
 TEST(PointCloud, FrameAlongTurnsTheAxisOntoZ) {

@@ -199,3 +199,22 @@ TEST(PostProcessorErrors, ARepeatedCutterLocationIsDroppedNotRefused) {
     EXPECT_NE(gcode.find("G1"), std::string::npos) << name;
   }
 }
+
+// A title with parentheses or a line break (a part named "bracket (rev B)") stays one comment, and a
+// comment line before the opening '%' is refused as LinuxCNC refuses it.
+TEST(PostProcessorText, TitlesStayCommentsAndPercentOpensTheFile) {
+  const Kinematics vmc(load_machine("vmc_3axis"));
+  ClProgram cl;
+  cl.origin = "part.cl";
+  cl.points.push_back({{{0, 0, 10}, {0, 0, 1}}, 0, true, 1});
+  cl.points.push_back({{{20, 0, 2}, {0, 0, 1}}, 600, false, 2});
+  const std::string gcode = post_process(cl, vmc, {.title = "bracket (rev B)\nM2"});
+  EXPECT_NE(gcode.find("(bracket [rev B] M2)"), std::string::npos) << gcode;
+  shop_safe::expect_shop_safe(gcode, "titled.ngc");
+  try {
+    parse_program("(title)\n%\nG21 G90\nG0 X0 Y0 Z5\n%\n", "late.ngc", {ReaderChoice::Plain, {}});
+    ADD_FAILURE() << "a comment before the opening '%' was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("late.ngc:2: '%' stands only on a program's first line"), std::string::npos) << e.what();
+  }
+}

@@ -79,7 +79,7 @@ TEST(RunFolder, ResumeTakesUpAKilledRunOrReusesOnlyTheNamedEntries) {
     done.commit();
   }
   {
-    RunFolder resumed(out, {.resume = true, .reused = {"optimization", "missing"}});
+    RunFolder resumed(out, {.resume = true, .reused = {"optimization", "missing"}, .inputs = {}});
     EXPECT_FALSE(resumed.resumed_partial());
     EXPECT_EQ(text(resumed.staging() / "optimization" / "K2.json"), "k2\n");
     EXPECT_FALSE(fs::exists(resumed.staging() / "summary.json"));
@@ -87,7 +87,7 @@ TEST(RunFolder, ResumeTakesUpAKilledRunOrReusesOnlyTheNamedEntries) {
     put(resumed.staging() / "optimization" / "K3.json", "k3\n");  // then killed
   }
   {
-    RunFolder again(out, {.resume = true, .reused = {"optimization"}});
+    RunFolder again(out, {.resume = true, .reused = {"optimization"}, .inputs = {}});
     EXPECT_TRUE(again.resumed_partial());
     EXPECT_EQ(text(again.staging() / "optimization" / "K3.json"), "k3\n");
     again.commit();
