@@ -3,6 +3,7 @@
 // earlier run's, byte for byte, and the killed run's files are only in `<out>.partial`, with no
 // summary.json; a run that completes leaves exactly its own files. A copy rerun with fewer packets
 // leaves no stale packet. And the folder problems are found before the work.
+#include "dome_cloud.hpp"
 #include "drom_process.hpp"
 
 #include <gtest/gtest.h>
@@ -114,20 +115,8 @@ TEST(OutputFolder, KilledFinishRerunsLeaveTheFinishedFolderAsItWas) {
 
 TEST(OutputFolder, KilledCopyRerunsAndFewerPacketsLeaveNoStaleFile) {
   fs::create_directories(root());
-  // A hemisphere of radius 15 sampled on rings 1 mm apart, with its normals.
-  std::ostringstream body;
-  int n = 0;
-  for (int i = 0; i <= 23; ++i) {
-    const double polar = M_PI / 2 * i / 23, r = 15 * std::sin(polar);
-    const int around = std::max(1, static_cast<int>(std::ceil(2 * M_PI * r)));
-    for (int k = 0; k < around; ++k, ++n) {
-      const double phi = 2 * M_PI * k / around, nx = std::sin(polar) * std::cos(phi), ny = std::sin(polar) * std::sin(phi), nz = std::cos(polar);
-      body << 15 * nx << " " << 15 * ny << " " << 15 * nz << " " << nx << " " << ny << " " << nz << "\n";
-    }
-  }
   const fs::path cloud = root() / "dome.ply";
-  std::ofstream(cloud) << "ply\nformat ascii 1.0\nelement vertex " << n
-                       << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nend_header\n" << body.str();
+  std::ofstream(cloud) << dome_ply();
   const fs::path out = root() / "copy";
   const std::string common = "copy " + cloud.string() + " --tool ball:6 --machine ucp710_like --set normals.from_file=true --set visibility.theta_step=10 " +
                              "--set finishing.step=1 --set finishing.scallop=0.05 --set roughing.depth=5 --set roughing.longitudinal_step=4 --quiet --out " + out.string();
