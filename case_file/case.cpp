@@ -232,6 +232,12 @@ void read_closed_loop(TomlReader& r, Case& c) {
   c.prior_scale = r.real("control.prior_scale", Range::positive(), c.prior_scale);
   c.use_stock_top = r.boolean("control.use_stock_top", c.use_stock_top);
   c.model_tolerance = r.real("control.model_tolerance", Range::positive(), c.model_tolerance);
+  // The same keys and ranges as machine/program_keys.cpp (the case holds plain values: case_file/ reads no machine).
+  c.program_tool_number = static_cast<int>(r.integer("program.tool_number", 1, 999, c.program_tool_number));
+  c.program_spindle_speed = r.real("program.spindle_speed", Range::closed(0, 200000), c.program_spindle_speed);
+  c.program_spindle = r.choice("program.spindle", {"cw", "ccw"}, c.program_spindle);
+  c.program_coolant = r.choice("program.coolant", {"off", "flood", "mist"}, c.program_coolant);
+  c.program_clearance = r.real("program.clearance", Range::positive(), c.program_clearance);
   c.run_scale = r.choice("run.scale", {"quick", "seed"}, "quick");
   if (r.has("run.quick")) c.run_quick = r.strings("run.quick");
   for (const auto& o : c.run_quick)

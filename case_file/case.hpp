@@ -119,6 +119,14 @@ struct Case {
   bool use_stock_top = true;         // fit the laser's readings of the unmachined top too (absolute w)
   double model_tolerance = 1e-3;     // mm: the POD bound drom run reduces the offline database to
 
+  // [program]: the corrected program's header and moves between cuts, the keys drom finish, copy
+  // and orient read (machine/program_keys.hpp; docs/case-files.md, "[program]").
+  int program_tool_number = 1;       // T and H
+  double program_spindle_speed = 0;  // rev/min; 0: 300 m/min on the tool's diameter
+  std::string program_spindle = "cw";    // cw (M3) or ccw (M4)
+  std::string program_coolant = "off";   // off, flood (M8) or mist (M7)
+  double program_clearance = 10;     // mm above the path's highest point: the plane rapids cross
+
   // [run]: what drom run does with the case.
   std::string run_scale = "quick";               // quick: apply run.quick first; seed: the case as written
   std::vector<std::string> run_quick;            // "key=value" overrides for a run of a few minutes

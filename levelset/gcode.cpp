@@ -1,5 +1,6 @@
 #include "levelset/gcode.hpp"
 
+#include "machine/post_processor.hpp"
 #include "machine/program_reader.hpp"
 #include "support/input_error.hpp"
 
@@ -118,7 +119,10 @@ std::string write_gcode(const Toolpath& path, const std::string& title) {
   std::ostringstream out;
   out.setf(std::ios::fixed);
   out.precision(4);
-  out << "%\n(" << title << ")\n(written by drom: mm, absolute, F in mm/min)\nG21 G90 G17\n";
+  // No spindle, tool change or retract: this is the record of the path the removal simulated, read
+  // back by path.gcode from its first position; the programs to run are posted by machine/.
+  out << "%\n(" << machine::comment_text(title) << ")\n(written by drom: mm, absolute, F in mm/min)\n"
+      << "(the path drom simulated, not a program to run on a machine: no tool change, spindle or coolant)\nG21 G90 G17\n";
   int n = 10;
   int offset = 0;
   double feed = -1;

@@ -9,6 +9,7 @@
 // Stages 2-3 are kept under --out and reused while the case that made them is unchanged, so a rerun
 // with other sensor or control settings costs only the loop.
 #include "loop/closed_loop_run.hpp"
+#include "support/run_folder.hpp"
 #include "loop/replanned_finish.hpp"
 #include "machine/cl_data.hpp"
 #include "paths/copy/cloud_path.hpp"
@@ -16,10 +17,12 @@
 
 #include "support/summary.hpp"
 #include "support/resources.hpp"
+#include "support/stop_request.hpp"
 
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <exception>
 #include <thread>
 
 namespace drom::loop {
@@ -76,25 +79,24 @@ nlohmann::json sync_json(const case_file::Case& c, const online::LoopSimulationS
 
 RunResult run_closed_loop(const case_file::Case& c, const RunOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  std::filesystem::create_directories(options.out);
+  // Before any long work: the folder takes files, the [sync] machine reads; then the earlier run's
+  // outputs go (its stages, offline/ and truth/, stay: reused only for their own case).
+  check_output_folder(options.out);
+  check_sync_machine(c);
+  clear_earlier_run(options.out);
   const ClosedLoopInputs in = prepare_closed_loop(c, options);
 
   // The two loops share everything but the correction; each has its own copy of the truth.
-  online::LoopSimulationSettings with = loop_settings(c, in.model), without = with;
-  with.correct = true;
-  without.correct = false;
-  const online::LoopSimulation corrected_loop(in.model, predictor_settings(c, in.model), with), uncorrected_loop(in.model, predictor_settings(c, in.model), without);
-  const TruthPlay truth_a = in.play(), truth_b = in.play();
-  if (!options.quiet) std::cerr << "drom run: the closed loop, with and without correction (" << corrected_loop.passes().size() << " passes)\n";
-  online::LoopSimulationResult corrected, uncorrected;
-  std::thread side([&] { uncorrected = uncorrected_loop.run(truth_b.part); });
-  corrected = corrected_loop.run(truth_a.part, [&](double f) {
+  if (!options.quiet) std::cerr << "drom run: the closed loop, with and without correction (" << online::floor_passes(in.model).size() << " passes)\n";
+  LoopPair loops = run_both_loops(c, in, 1.0, options.stop, [&](double f) {
     if (!options.quiet) std::fprintf(stderr, "\r  %3.0f %%", 100 * f);
   });
-  side.join();
+  online::LoopSimulationResult& corrected = loops.corrected;
+  online::LoopSimulationResult& uncorrected = loops.uncorrected;
   if (!options.quiet) std::fprintf(stderr, "\r  100 %%\n");
 
-  auto files = write_loop_outputs(options.out, c, in.model, truth_a.part, corrected, uncorrected);
+  LoopOutputs outputs = write_loop_outputs(options.out, c, in.model, loops.corrected_truth.part, corrected, uncorrected);
+  std::vector<std::string>& files = outputs.files;
   // The finishing pass re-planned on the predicted final shape, judged against the truth's.
   nlohmann::json replan;
   if (options.replan && !corrected.shapes.empty()) {
@@ -132,7 +134,7 @@ RunResult run_closed_loop(const case_file::Case& c, const RunOptions& options) {
                  {"max_abs_target_w_mm", in.truth.target_history.cwiseAbs().maxCoeff()}}},
       {"sensor", {{"noise_mm", c.sensor_noise}, {"period_s", c.sensor_period}, {"angle_deg", c.sensor_angle}, {"offset_mm", c.sensor_offset},
                   {"offset_error_mm", c.sensor_offset_error}, {"angle_error_deg", c.sensor_angle_error}}},
-      {"sync", sync_json(c, with, corrected)},
+      {"sync", sync_json(c, loops.corrected_settings, corrected)},
       {"control", {{"refresh_rate_hz", c.refresh_rate}, {"max_offset_rate_mm_s", c.max_offset_rate}, {"learning_tolerance_mm", c.learning_tolerance}}},
       {"corrected", loop_json(corrected)},
       {"uncorrected", loop_json(uncorrected)},
@@ -144,6 +146,7 @@ RunResult run_closed_loop(const case_file::Case& c, const RunOptions& options) {
       {"machine", machine_info()},
       {"files", files}};
   if (!replan.is_null()) summary["replanned_finish"] = replan;
+  if (outputs.program_verdict) summary["program_verdict"] = outputs.program_verdict->to_json();
   write_summary(options.out, summary);
   RunResult result;
   result.headline = h;
@@ -151,6 +154,7 @@ RunResult run_closed_loop(const case_file::Case& c, const RunOptions& options) {
   result.corrected = std::move(corrected);
   result.uncorrected = std::move(uncorrected);
   result.model_rank = in.model.rank();
+  result.program_verdict = outputs.program_verdict;
   return result;
 }
 

@@ -11,6 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <optional>
+
 namespace drom::loop {
 
 struct RunResult {
@@ -18,6 +20,7 @@ struct RunResult {
   nlohmann::json summary;  // summary.json's content
   online::LoopSimulationResult corrected, uncorrected;
   int model_rank = 0;
+  std::optional<machine::ProgramVerdict> program_verdict;  // the corrected program's, on the [sync] machine
 };
 
 RunResult run_closed_loop(const case_file::Case& c, const RunOptions& options);

@@ -13,12 +13,15 @@
 #include "support/hdf5_reader.hpp"
 #include "support/input_error.hpp"
 #include "support/resources.hpp"
+#include "support/stop_request.hpp"
 
 #include <chrono>
+#include <exception>
 #include <cmath>
 #include <iostream>
 #include <map>
 #include <optional>
+#include <thread>
 #include <tuple>
 
 namespace drom::loop {
@@ -33,7 +36,7 @@ case_file::Case load_run_case(const std::optional<std::filesystem::path>& path, 
 
 namespace {
 
-const std::vector<std::string> kLoopTables = {"sensor", "sync", "control", "run"};
+const std::vector<std::string> kLoopTables = {"sensor", "sync", "control", "run", "program"};
 const std::vector<std::string> kPathKeys = {"part.stl", "stress.table", "truth.table", "path.gcode"};
 
 // A stage (offline or truth) to compute: its case and options, for `text` in `dir`; none when
@@ -52,6 +55,7 @@ Stage stage_in(const std::string& text, const std::filesystem::path& dir, const 
   stage.options.frames = 0;
   stage.options.resume = std::filesystem::exists(dir / ".checkpoint");
   stage.options.team = options.team;
+  stage.options.stop = options.stop;
   return stage;
 }
 
@@ -77,7 +81,8 @@ std::optional<Stage> stage_to_run(const std::string& text, const std::filesystem
 }
 
 // Checks a stage wrote its database.
-void check_finished(const offline::JobResult& result, const std::filesystem::path& dir) {
+void check_finished(const offline::JobResult& result, const std::filesystem::path& dir, const std::stop_token& stop) {
+  if (!result.finished) throw_if_stop_requested(stop);
   if (!result.finished || !std::filesystem::exists(dir / "database.h5"))
     throw InputError(dir.string() + ": the stage stopped before writing database.h5; run again to resume it");
 }
@@ -115,20 +120,20 @@ void machining_stages(const case_file::Case& c, const RunOptions& options, Close
   if (offline_stage && truth_stage) {
     say("offline snapshots and truth run, in one machining pass (" + offline_stage->options.out.string() + ", " + truth_stage->options.out.string() + ")");
     const auto [offline_result, truth_result] = offline::run_offline_and_truth(offline_stage->c, offline_stage->options, truth_stage->c, truth_stage->options);
-    check_finished(offline_result, offline_stage->options.out);
-    check_finished(truth_result, truth_stage->options.out);
+    check_finished(offline_result, offline_stage->options.out, options.stop);
+    check_finished(truth_result, truth_stage->options.out, options.stop);
     in.offline_seconds = seconds_since(stages_start);
     in.one_pass = true;
   } else {
     say("offline snapshots (" + (options.out / "offline").string() + (offline_stage ? ")" : ", reused)"));
     if (offline_stage) {
-      check_finished(offline::run_job(offline_stage->c, offline::JobKind::Offline, offline_stage->options), offline_stage->options.out);
+      check_finished(offline::run_job(offline_stage->c, offline::JobKind::Offline, offline_stage->options), offline_stage->options.out, options.stop);
       in.offline_seconds = seconds_since(stages_start);
     }
     say("truth run (" + (options.out / "truth").string() + (truth_stage ? ")" : ", reused)"));
     if (truth_stage) {
       const auto truth_start = std::chrono::steady_clock::now();
-      check_finished(offline::run_job(truth_stage->c, offline::JobKind::Truth, truth_stage->options), truth_stage->options.out);
+      check_finished(offline::run_job(truth_stage->c, offline::JobKind::Truth, truth_stage->options), truth_stage->options.out, options.stop);
       in.truth_seconds = seconds_since(truth_start);
     }
   }
@@ -241,6 +246,10 @@ online::PredictorSettings predictor_settings(const case_file::Case& c, const red
   return s;
 }
 
+void check_sync_machine(const case_file::Case& c) {
+  if (!c.sync_machine.empty()) (void)machine::load_machine(c.sync_machine);
+}
+
 online::LoopSimulationSettings loop_settings(const case_file::Case& c, const reduce::LightModel& model) {
   online::LoopSimulationSettings s;
   if (!c.sync_machine.empty()) {
@@ -264,6 +273,39 @@ online::LoopSimulationSettings loop_settings(const case_file::Case& c, const red
   s.correct = c.correct;
   s.seed = c.sensor_seed;
   return s;
+}
+
+LoopPair run_both_loops(const case_file::Case& c, const ClosedLoopInputs& in, double factor, const std::stop_token& stop,
+                        const std::function<void(double)>& progress) {
+  online::LoopSimulationSettings with = loop_settings(c, in.model), without = with;
+  with.correct = true;
+  without.correct = false;
+  const online::LoopSimulation corrected_loop(in.model, predictor_settings(c, in.model), with), uncorrected_loop(in.model, predictor_settings(c, in.model), without);
+  LoopPair pair;
+  pair.corrected_settings = with;
+  pair.corrected_truth = in.play(factor);
+  const TruthPlay& a = pair.corrected_truth;
+  const TruthPlay b = in.play(factor);
+  std::exception_ptr side_failure;
+  std::thread side([&] {
+    try {
+      pair.uncorrected = uncorrected_loop.run(b.part, [&](double) { throw_if_stop_requested(stop); });
+    } catch (...) {
+      side_failure = std::current_exception();
+    }
+  });
+  try {
+    pair.corrected = corrected_loop.run(a.part, [&](double f) {
+      throw_if_stop_requested(stop);
+      if (progress) progress(f);
+    });
+  } catch (...) {
+    side.join();
+    throw;
+  }
+  side.join();
+  if (side_failure) std::rethrow_exception(side_failure);
+  return pair;
 }
 
 }  // namespace drom::loop

@@ -9,6 +9,8 @@
 #include "reduce/light_model.hpp"
 
 #include <filesystem>
+#include <functional>
+#include <stop_token>
 #include <memory>
 #include <optional>
 #include <string>
@@ -29,6 +31,10 @@ struct RunOptions {
   // The ranks of an MPI job (mpirun -np N drom run): they share the offline-and-truth pass, then rank 0
   // alone goes on. Null: this process alone.
   offline::JobTeam* team = nullptr;
+  // A stop asked from outside (Python's Ctrl-C): the stages stop as the offline job does
+  // (JobOptions::stop), the loop within a percent of its steps; then StopRequested is thrown
+  // (support/stop_request.hpp), and a rerun resumes the stages from their checkpoints.
+  std::stop_token stop;
 };
 
 // The truth run, as the closed loop plays it.
@@ -64,11 +70,27 @@ ClosedLoopInputs prepare_closed_loop(const case_file::Case& c, const RunOptions&
 // runs on rank 0, nothing else.
 void help_prepare_closed_loop(const case_file::Case& c, const RunOptions& options);
 
+// The case's [sync] machine read (InputError naming it otherwise): before the stages, so a wrong
+// name costs no machining simulation.
+void check_sync_machine(const case_file::Case& c);
+
 // The measurement sigma is the sensor's noise and the model's own error bound together: a noise-free
 // sensor still sees what the model cannot represent, and the band should say so.
 online::PredictorSettings predictor_settings(const case_file::Case& c, const reduce::LightModel& model);
 // The loop's settings; the machine's real motion along the model's path ([sync] machine) is
 // predicted here (machine/program_clock.hpp).
 online::LoopSimulationSettings loop_settings(const case_file::Case& c, const reduce::LightModel& model);
+
+// The loop twice on the same case, at once on two threads: offsets commanded (corrected) and held at
+// 0 (uncorrected), each on its own copy of the truth played by `factor`. `progress` gets the
+// corrected loop's fraction done. A stop asked through `stop` throws StopRequested from both loops
+// within a percent of their steps.
+struct LoopPair {
+  online::LoopSimulationResult corrected, uncorrected;
+  online::LoopSimulationSettings corrected_settings;  // the corrected loop's
+  TruthPlay corrected_truth;                          // the truth the corrected loop played
+};
+LoopPair run_both_loops(const case_file::Case& c, const ClosedLoopInputs& in, double factor, const std::stop_token& stop,
+                        const std::function<void(double fraction)>& progress = {});
 
 }  // namespace drom::loop

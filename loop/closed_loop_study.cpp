@@ -6,6 +6,7 @@
 // The stress amplitude scales the truth's displacements (they are linear in the stresses), so it
 // does not rerun the truth either.
 #include "loop/closed_loop_study.hpp"
+#include "support/run_folder.hpp"
 
 #include "loop/closed_loop_report.hpp"
 #include "support/summary.hpp"
@@ -18,7 +19,6 @@
 #include <cstdio>
 #include <iostream>
 #include <map>
-#include <thread>
 
 namespace drom::loop {
 
@@ -60,7 +60,9 @@ nlohmann::json run_study(const case_file::Case& base, const std::string& paramet
   }
   if (values.empty()) throw InputError("--values: expected at least one value, e.g. --values 0,0.02,0.05");
   const Parameter& parameter = it->second;
-  std::filesystem::create_directories(options.out);
+  check_output_folder(options.out);
+  check_sync_machine(base);
+  clear_earlier_run(options.out);
   const ClosedLoopInputs in = prepare_closed_loop(base, options);
 
   std::string csv = parameter_name +
@@ -73,15 +75,8 @@ nlohmann::json run_study(const case_file::Case& base, const std::string& paramet
     case_file::Case c = base;
     parameter.apply(c, value);
     const double factor = parameter_name == "amplitude" ? value : 1.0;
-    online::LoopSimulationSettings with = loop_settings(c, in.model), without = with;
-    with.correct = true;
-    without.correct = false;
-    const online::LoopSimulation corrected_loop(in.model, predictor_settings(c, in.model), with), uncorrected_loop(in.model, predictor_settings(c, in.model), without);
-    const TruthPlay a = in.play(factor), b = in.play(factor);
-    online::LoopSimulationResult corrected, uncorrected;
-    std::thread side([&] { uncorrected = uncorrected_loop.run(b.part); });
-    corrected = corrected_loop.run(a.part);
-    side.join();
+    const LoopPair loops = run_both_loops(c, in, factor, options.stop);
+    const online::LoopSimulationResult &corrected = loops.corrected, &uncorrected = loops.uncorrected;
     const Headline h = headline(corrected, uncorrected, c.shape_pass);
     char line[512];
     std::snprintf(line, sizeof line, "%.6g,%.3f,%d,%.6e,%.6e,%.6e,%.6e,%.6e,%.4f,%.6e,%.6e\n", value, h.learned_at, h.learned_pass, h.uncorrected_max,

@@ -8,6 +8,7 @@
 //      profiles are predicted within the tolerance; then the altitude is corrected;
 //   5. error maps (VTK, PNG), error along the path (CSV, PNG), summary.json.
 #include "loop/deviation_study.hpp"
+#include "support/run_folder.hpp"
 #include "support/summary.hpp"
 #include "support/vtk_fields.hpp"
 #include "online/dead_reckoning.hpp"
@@ -320,7 +321,8 @@ nlohmann::json deviation_summary(const StudyFigures& f, double seconds) {
 nlohmann::json run_deviation_study(const DeviationCase& c, const std::filesystem::path& out, bool quiet) {
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
-  std::filesystem::create_directories(out);
+  check_output_folder(out);
+  clear_earlier_run(out);
 
   // 1. Family and basis.
   const reduce::DeviationFamily family = build_family(c);

@@ -70,6 +70,25 @@ void settle_program_start(NcProgram& program) {
   }
 }
 
+std::string statement_of(const std::string& raw, const std::string& where) {
+  std::string line;
+  int depth = 0;
+  for (char c : raw) {
+    if (c == ';' && depth == 0) break;
+    if (c == '(') {
+      if (depth > 0) throw InputError(where + "nested '(' in a comment");
+      ++depth;
+    } else if (c == ')') {
+      if (depth == 0) throw InputError(where + "')' without '('");
+      --depth;
+    } else if (depth == 0) {
+      line += c;
+    }
+  }
+  if (depth != 0) throw InputError(where + "unclosed comment '('");
+  return line;
+}
+
 NcProgram parse_plain_gcode(const std::string& text, const std::string& origin) {
   NcProgram program;
   program.origin = origin;
@@ -88,21 +107,7 @@ NcProgram parse_plain_gcode(const std::string& text, const std::string& origin) 
     ++line_no;
     const std::string where = origin + ":" + std::to_string(line_no) + ": ";
     auto outside = [&](const std::string& what) { throw OutsidePlainSubset(where + what + " is outside drom's plain G-code subset"); };
-    std::string line;
-    int depth = 0;
-    for (char c : raw) {
-      if (c == ';' && depth == 0) break;
-      if (c == '(') {
-        if (depth > 0) throw InputError(where + "nested '(' in a comment");
-        ++depth;
-      } else if (c == ')') {
-        if (depth == 0) throw InputError(where + "')' without '('");
-        --depth;
-      } else if (depth == 0) {
-        line += c;
-      }
-    }
-    if (depth != 0) throw InputError(where + "unclosed comment '('");
+    const std::string line = statement_of(raw, where);
     const auto first = line.find_first_not_of(" \t\r"), last = line.find_last_not_of(" \t\r");
     if (first != std::string::npos && line.substr(first, last - first + 1) == "%") {
       if (opened_with_percent) {  // the closing '%'

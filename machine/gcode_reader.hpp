@@ -24,6 +24,11 @@ class OutsidePlainSubset : public InputError {
 
 NcProgram parse_plain_gcode(const std::string& text, const std::string& origin);
 
+// One line's statement, its comments cut out ('(...)' and all from ';'). Throws InputError naming
+// `where` ("file:line: ") for a '(' inside a comment, a ')' without '(' or a comment left open, as
+// LinuxCNC's interpreter refuses them.
+std::string statement_of(const std::string& line, const std::string& where);
+
 // The convention both readers share: a program starts where its first motion ends when that is a
 // rapid (the machine's position before it is unknown); a first motion that cuts starts at the program
 // origin, as LinuxCNC's interpreter assumes, and the program says so (start_assumed).

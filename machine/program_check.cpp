@@ -1,6 +1,8 @@
 #include "machine/program_check.hpp"
 
 #include "machine/cl_data.hpp"
+#include "machine/gcode_reader.hpp"
+#include "machine/program_verdict.hpp"
 #include "support/atomic_file.hpp"
 #include "support/run_folder.hpp"
 #include "support/input_error.hpp"
@@ -54,17 +56,17 @@ std::string axis_label(const Machine& m, int j) { return std::string(1, m.axes[j
 
 // A subroutine file: its first statement opens an O-word `sub` and its last closes it (`endsub`),
 // comments, blank lines and '%' aside. It moves the machine only where a program calls it.
+// A malformed comment is no subroutine file: the reader then names the line.
 bool is_subroutine_file(const fs::path& path) {
   std::ifstream in(path);
   std::vector<std::string> statements;
   for (std::string raw; std::getline(in, raw);) {
     std::string line;
-    int depth = 0;
-    for (char c : raw) {
-      if (c == ';' && depth == 0) break;
-      if (c == '(') ++depth;
-      else if (c == ')') depth = std::max(0, depth - 1);
-      else if (depth == 0 && !std::isspace(static_cast<unsigned char>(c))) line += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    try {
+      for (char c : statement_of(raw, ""))
+        if (!std::isspace(static_cast<unsigned char>(c))) line += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    } catch (const InputError&) {
+      return false;
     }
     if (!line.empty() && line != "%") statements.push_back(line);
   }
@@ -119,33 +121,13 @@ nlohmann::json check_program(const ProgramCheckOptions& o) {
   RunFolder folder(o.out, {.resume = false, .reused = {}, .inputs = {o.program}});  // before the prediction: an output folder that cannot be written is found now
   if (program.blocks.empty()) return report_no_motion(o, folder, m, loaded.reader, read_s, start);
 
-  // Travel per block end, and passages near the singular direction.
+  // Travel per block end, passages near the singular direction and the demand at the programmed
+  // feed: the verdict drom gives every program it posts (CL input: the inverse kinematics' findings
+  // stand for the strokes, with the CL file's lines).
+  const ProgramVerdict verdict = scan_program(program, o.program.string(), kin);
   std::vector<JointPath::Violation> travel = loaded.violations;
-  struct Passage {
-    int line;
-    double distance;
-  };
-  std::vector<Passage> passages;
-  const bool from_cl = loaded.reader == "cl";
-  for (std::size_t i = 0; i < program.blocks.size(); ++i) {
-    const MachineBlock& b = program.blocks[i];
-    if (!from_cl) {
-      for (int j = 0; j < m.joint_count(); ++j) {
-        const double value = kin.stroke_value(j, b.end);
-        if (m.axes[j].within(value, 1e-6)) continue;
-        char buf[96];
-        std::snprintf(buf, sizeof buf, " beyond its stroke [%g, %g] %s", joint_in_program_units(m, j, m.axes[j].min), joint_in_program_units(m, j, m.axes[j].max),
-                      m.axes[j].rotary ? "deg" : "mm");
-        travel.push_back({i, j, value,
-                          o.program.string() + ":" + std::to_string(b.line) + ": " + describe_joint_value(m, j, value) +
-                              (j == 2 && kin.tip_controlled() ? " (gauge line: Z + tool length)" : "") + buf});
-      }
-    }
-    if (m.rotary_count() > 0) {
-      const double d = kin.singularity_distance(kin.forward(b.end).axis);
-      if (d < m.singularity_cone && (passages.empty() || passages.back().line != b.line)) passages.push_back({b.line, d});
-    }
-  }
+  if (loaded.reader != "cl")
+    for (const StrokeExcess& e : verdict.beyond_strokes) travel.push_back({e.block, e.joint, e.value, e.what});
 
   const auto t_predict = std::chrono::steady_clock::now();
   const FeedPrediction p = predict_feed(program, kin);
@@ -287,8 +269,10 @@ nlohmann::json check_program(const ProgramCheckOptions& o) {
   for (const auto& v : travel) tv.push_back({{"block", v.pose}, {"axis", v.joint >= 0 ? axis_label(m, v.joint) : "orientation"}, {"what", v.what}});
   s["travel_violations"] = tv;
   nlohmann::json sp = nlohmann::json::array();
-  for (const auto& q : passages) sp.push_back({{"line", q.line}, {"distance_deg", q.distance * 180 / std::numbers::pi}});
+  for (const auto& q : verdict.singular_passages) sp.push_back({{"line", q.line}, {"distance_deg", q.distance * 180 / std::numbers::pi}});
   s["singularity_passages"] = sp;
+  s["demand_at_programmed_feed"] = verdict.demand_json();
+  s["slows_down"] = verdict.slows_down();
   s["planner"] = {{"zero_acceleration_anchors", p.anchors}, {"passes", p.iterations}};
   s["timing_s"] = {{"read", read_s}, {"predict", predict_s}, {"write", seconds_since(t_write)}, {"total", seconds_since(start)}};
   s["files"] = files;

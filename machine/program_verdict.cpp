@@ -74,27 +74,26 @@ void judge_run(const MachineProgram& program, const std::vector<std::size_t>& ru
 
 }  // namespace
 
-ProgramVerdict judge_program(const std::string& text, const std::string& origin, const Kinematics& kin) {
+ProgramVerdict scan_program(const MachineProgram& program, const std::string& origin, const Kinematics& kin) {
   const Machine& m = kin.machine();
   ProgramVerdict v;
   v.origin = origin;
-  ProgramReadOptions plain;
-  plain.reader = ReaderChoice::Plain;
-  const MachineProgram program = to_machine_program(parse_program(text, origin, plain), m);
-  for (const MachineBlock& b : program.blocks) {
+  for (std::size_t i = 0; i < program.blocks.size(); ++i) {
+    const MachineBlock& b = program.blocks[i];
     for (int j = 0; j < m.joint_count(); ++j) {
       const double value = kin.stroke_value(j, b.end);
       if (m.axes[j].within(value, 1e-6)) continue;
-      if (v.out_of_reach_count++ < 20) {
-        char buf[160];
-        std::snprintf(buf, sizeof buf, ": %s beyond its stroke [%g, %g] %s", describe_joint_value(m, j, value).c_str(), joint_in_program_units(m, j, m.axes[j].min),
-                      joint_in_program_units(m, j, m.axes[j].max), m.axes[j].rotary ? "deg" : "mm");
-        v.out_of_reach.push_back(origin + ":" + std::to_string(b.line) + buf);
-      }
+      char buf[160];
+      std::snprintf(buf, sizeof buf, " beyond its stroke [%g, %g] %s", joint_in_program_units(m, j, m.axes[j].min), joint_in_program_units(m, j, m.axes[j].max),
+                    m.axes[j].rotary ? "deg" : "mm");
+      v.beyond_strokes.push_back({i, b.line, j, value,
+                                  origin + ":" + std::to_string(b.line) + ": " + describe_joint_value(m, j, value) +
+                                      (j == 2 && kin.tip_controlled() ? " (gauge line: Z + tool length)" : "") + buf});
     }
-    if (m.rotary_count() > 0 && kin.singularity_distance(kin.forward(b.end).axis) < m.singularity_cone &&
-        (v.singularity_lines.empty() || v.singularity_lines.back() != b.line))
-      v.singularity_lines.push_back(b.line);
+    if (m.rotary_count() > 0) {
+      const double d = kin.singularity_distance(kin.forward(b.end).axis);
+      if (d < m.singularity_cone && (v.singular_passages.empty() || v.singular_passages.back().line != b.line)) v.singular_passages.push_back({b.line, d});
+    }
   }
   std::vector<std::size_t> run;
   for (std::size_t i = 0; i <= program.blocks.size(); ++i) {
@@ -107,6 +106,14 @@ ProgramVerdict judge_program(const std::string& text, const std::string& origin,
       run.clear();
     }
   }
+  return v;
+}
+
+ProgramVerdict judge_program(const std::string& text, const std::string& origin, const Kinematics& kin) {
+  ProgramReadOptions plain;
+  plain.reader = ReaderChoice::Plain;
+  const MachineProgram program = to_machine_program(parse_program(text, origin, plain), kin.machine());
+  ProgramVerdict v = scan_program(program, origin, kin);
   if (v.runnable() && !program.blocks.empty()) {
     const FeedPrediction p = predict_feed(program, kin);
     v.cycle_time = p.cycle_time;
@@ -116,15 +123,23 @@ ProgramVerdict judge_program(const std::string& text, const std::string& origin,
   return v;
 }
 
-nlohmann::json ProgramVerdict::to_json() const {
+nlohmann::json ProgramVerdict::demand_json() const {
   auto demand = [](const AxisDemand& d) { return nlohmann::json{{"ratio", d.ratio}, {"axis", d.axis}, {"line", d.line}}; };
+  return {{"velocity", demand(velocity)}, {"acceleration", demand(acceleration)}, {"jerk", demand(jerk)}};
+}
+
+nlohmann::json ProgramVerdict::to_json() const {
+  std::vector<std::string> first;
+  for (std::size_t i = 0; i < std::min<std::size_t>(20, beyond_strokes.size()); ++i) first.push_back(beyond_strokes[i].what);
+  std::vector<int> lines;
+  for (const auto& p : singular_passages) lines.push_back(p.line);
   return {{"program", origin},
           {"runnable", runnable()},
-          {"out_of_reach", out_of_reach},
-          {"out_of_reach_blocks", out_of_reach_count},
-          {"singularity_passages", singularity_lines.size()},
-          {"singularity_lines", singularity_lines},
-          {"demand_at_programmed_feed", {{"velocity", demand(velocity)}, {"acceleration", demand(acceleration)}, {"jerk", demand(jerk)}}},
+          {"out_of_reach", first},
+          {"out_of_reach_blocks", beyond_strokes.size()},
+          {"singularity_passages", singular_passages.size()},
+          {"singularity_lines", lines},
+          {"demand_at_programmed_feed", demand_json()},
           {"slows_down", slows_down()},
           {"cycle_time_s", cycle_time},
           {"programmed_time_s", programmed_time},
@@ -134,8 +149,8 @@ nlohmann::json ProgramVerdict::to_json() const {
 std::string ProgramVerdict::summary_line() const {
   char buf[512];
   if (!runnable()) {
-    std::snprintf(buf, sizeof buf, "%zu blocks beyond the machine's strokes (first: %s): not written as a runnable program", out_of_reach_count,
-                  out_of_reach.front().c_str());
+    std::snprintf(buf, sizeof buf, "%zu blocks beyond the machine's strokes (first: %s): not written as a runnable program", beyond_strokes.size(),
+                  beyond_strokes.front().what.c_str());
     return buf;
   }
   auto part = [](const char* what, const AxisDemand& d) {
@@ -146,7 +161,7 @@ std::string ProgramVerdict::summary_line() const {
   };
   std::snprintf(buf, sizeof buf, "cycle %.1f s (%.1f s at the programmed feed, %.0f %% of the cutting length at it); demand over the limits at the programmed feed: %s, %s, %s; %zu singularity passages",
                 cycle_time, programmed_time, 100 * share_at_programmed_feed, part("velocity", velocity).c_str(), part("acceleration", acceleration).c_str(),
-                part("jerk", jerk).c_str(), singularity_lines.size());
+                part("jerk", jerk).c_str(), singular_passages.size());
   return buf;
 }
 

@@ -1,5 +1,7 @@
 // The offline job (offline/offline_job.hpp): the machining simulation, station by station.
 #include "offline/offline_job.hpp"
+#include "support/run_folder.hpp"
+#include "support/stop_request.hpp"
 
 #include "fem/elastic_problem.hpp"
 #include "fem/node_sets.hpp"
@@ -69,7 +71,9 @@ class Checkpoint {
     } else if (join == Join::Existing) {
       throw InputError(dir_.string() + ": no job's stations are here (run the slices with --stations a:b and the same --out first)");
     } else {
-      // Station files without a manifest are not known to be this run's (a removal cut short): gone.
+      // A new job: the earlier one's database and summary go first (support/summary.hpp). Station
+      // files without a manifest are not known to be this run's (a removal cut short): gone.
+      clear_earlier_run(dir_.parent_path());
       std::filesystem::remove_all(dir_);
       std::filesystem::create_directories(dir_);
       write_file_atomically(manifest, identity);
@@ -276,7 +280,7 @@ PassPart prepare_part(const Pass& pass) {
   const case_file::Case& c = pass.c;
   PassPart part;
   on_every_rank(pass.team, [&] {
-    const std::vector<std::string> not_machining = {"truth", "sensor", "sync", "control", "run"};
+    const std::vector<std::string> not_machining = {"truth", "sensor", "sync", "control", "run", "program"};
     for (const auto& o : pass.outputs)
       if (case_text_without(o.c.resolved_toml, not_machining, {}, "") != case_text_without(c.resolved_toml, not_machining, {}, ""))
         throw std::invalid_argument("one machining pass for " + o.c.origin + " and " + c.origin + ": their cases machine different parts");
@@ -317,6 +321,7 @@ void open_checkpoints(const Pass& pass) {
                                 : pass.options.resume ? Checkpoint::Join::Resume
                                                       : Checkpoint::Join::Fresh;
   on_root_then_broadcast(pass.team, [&] {
+    for (const auto& o : pass.outputs) check_output_folder(o.options.out);
     open(join);
     return std::string();
   });
@@ -327,12 +332,17 @@ void open_checkpoints(const Pass& pass) {
 
 // 1. Removal, on rank 0 (`run` is rank 0's): the activity of every station (level set, a few seconds),
 //    as what changes from one station to the next; every rank replays it.
+// A stop asked outside the station sweep (JobOptions::stop) throws StopRequested; run_job turns it
+// into an unfinished result. Nothing the job saved is lost: the checkpoints are written per station.
+void stop_if_asked(const Pass& pass) { throw_if_stop_requested(pass.options.stop); }
+
 ActivityHistory sweep_removal(const Pass& pass, const PartModel& part, std::unique_ptr<MachiningRun>& run) {
   return ActivityHistory::from_bytes(on_root_then_broadcast(pass.team, [&] {
     run = std::make_unique<MachiningRun>(pass.c, part);
     ActivityHistory swept(static_cast<std::size_t>(part.mesh.element_count()));
     std::vector<double> remaining(static_cast<std::size_t>(part.mesh.element_count()), 1.0);
     for (std::size_t k = 0; k < run->stations().size(); ++k) {
+      stop_if_asked(pass);
       run->advance(remaining);
       swept.append(remaining);
     }
@@ -536,7 +546,7 @@ bool StationSweep::solve_chunk(StationSolver& solver, const ChunkTask& task, std
   for (std::size_t k = task.first; k < task.last; ++k) {
     if (k > task.first) history.advance(k, activity);
     const bool saved = !range.contains(k) || pass.saved_by_all(station_name(k));
-    if (!saved && (work.cancelled() || (pass.options.stop_after >= 0 && solved.fetch_add(1) >= pass.options.stop_after))) return false;
+    if (!saved && (work.cancelled() || pass.options.stop.stop_requested() || (pass.options.stop_after >= 0 && solved.fetch_add(1) >= pass.options.stop_after))) return false;
     const auto solve_start = std::chrono::steady_clock::now();
     const Eigen::MatrixXd U = solver.solve(activity, k > task.first);
     const double solve_seconds = seconds_since(solve_start);
@@ -561,7 +571,7 @@ void StationSweep::worker() {
     const auto solver = solvers.make_worker();
     bool stopped = false;
     std::vector<double> activity;
-    for (std::size_t j = next++; j < deal.mine.size() && !stopped && !work.cancelled(); j = next++)
+    for (std::size_t j = next++; j < deal.mine.size() && !stopped && !work.cancelled() && !pass.options.stop.stop_requested(); j = next++)
       stopped = !solve_chunk(*solver, deal.mine[j], activity);
     std::lock_guard<std::mutex> lock(report);
     accumulate(statistics, solver->statistics());
@@ -865,7 +875,9 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
   // third of the run in system time). Single-threaded kernels also round the same way whatever
   // --threads is, so the database does not depend on it.
   const SingleThreadedKernels single_threaded_kernels;
+  stop_if_asked(pass);
   const Equilibrium equilibrium = equilibrate(pass, part, history);
+  stop_if_asked(pass);
   const double equilibrium_seconds = pass.elapsed() - removal_seconds;
   const Deal deal = deal_stations(pass, history, *equilibrium.solvers, range);
   const int threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
@@ -906,12 +918,23 @@ std::vector<JobResult> simulate(std::vector<Output>& outputs) {
 
 }  // namespace
 
+// simulate(), with a stop asked before the station sweep as an unfinished result (in the sweep,
+// the workers stop and the pass ends as with --stop-after).
+std::vector<JobResult> simulate_until_stopped(std::vector<Output>& outputs) {
+  try {
+    return simulate(outputs);
+  } catch (const StopRequested&) {
+    if (!outputs.front().options.quiet) std::cerr << "drom: stopped on request before the stations; continue with --resume\n";
+    return std::vector<JobResult>(outputs.size());
+  }
+}
+
 JobResult run_job(const case_file::Case& c, JobKind kind, const JobOptions& options) {
   std::vector<Output> outputs(1);
   outputs[0].options = options;
   outputs[0].truth = kind == JobKind::Truth;
   outputs[0].c = c;
-  return simulate(outputs).front();
+  return simulate_until_stopped(outputs).front();
 }
 
 std::pair<JobResult, JobResult> run_offline_and_truth(const case_file::Case& offline_case, const JobOptions& offline, const case_file::Case& truth_case,
@@ -922,7 +945,7 @@ std::pair<JobResult, JobResult> run_offline_and_truth(const case_file::Case& off
   outputs[1].options = truth;
   outputs[1].truth = true;
   outputs[1].c = truth_case;
-  auto results = simulate(outputs);
+  auto results = simulate_until_stopped(outputs);
   return {results[0], results[1]};
 }
 

@@ -20,6 +20,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <functional>
+#include <stop_token>
 #include <utility>
 
 namespace drom::offline {
@@ -39,6 +40,11 @@ struct JobOptions {
   // far, of how many. Returning false stops the job after the stations in progress (resume later).
   // An exception thrown here stops the job and comes out of run_job.
   std::function<bool(std::size_t saved, std::size_t total)> progress;
+  // A stop asked from outside the job (Python's Ctrl-C, a service shutting down): the job stops as
+  // when `progress` returns false, after the stations in progress, or between two steps of the
+  // removal or before its next stage. It comes back unfinished, its checkpoints resumable. Each
+  // check is a flag read, so a stop lands within one station's solve.
+  std::stop_token stop;
   // Only the stations a:b (Python's slice: a to b - 1) into the shared checkpoint folder, for
   // schedulers without MPI; no database (drom merge writes it once every slice is there).
   std::string stations;
@@ -64,7 +70,7 @@ JobResult run_job(const case_file::Case& c, JobKind kind, const JobOptions& opti
 // Both databases in one machining pass (drom run): one factorization per station serves the unit
 // profiles and the truth, and each database is the one run_job writes for it, bit for bit. The two
 // cases must machine the same part: they may differ by [truth] and the closed loop's tables only.
-// stop_after, threads, quiet and progress are taken from the offline job's options.
+// stop_after, threads, quiet, progress and stop are taken from the offline job's options.
 std::pair<JobResult, JobResult> run_offline_and_truth(const case_file::Case& offline_case, const JobOptions& offline, const case_file::Case& truth_case,
                                                       const JobOptions& truth);
 

@@ -25,8 +25,14 @@
 
 #include <array>
 #include <chrono>
+#include <condition_variable>
+#include <exception>
+#include <functional>
 #include <memory>
+#include <mutex>
 #include <span>
+#include <stop_token>
+#include <thread>
 #include <type_traits>
 
 namespace py = pybind11;
@@ -66,6 +72,56 @@ py::dict job_dict(const offline::JobResult& r) {
   return d;
 }
 
+// Runs `job` on a thread of its own while this thread, Python's, waits with the GIL released and
+// looks at its signals every 20 ms: Ctrl-C (KeyboardInterrupt, or any exception a signal handler
+// raises) asks the job to stop through its stop token, the job ends after the work in progress and
+// leaves its checkpoints resumable, and the exception is raised here. A job run in this thread would
+// see Python's signals only when it returned: Python runs its handlers between bytecodes.
+template <class Result>
+Result run_interruptible(const std::function<Result(std::stop_token)>& job) {
+  std::stop_source stop;
+  std::mutex mutex;
+  std::condition_variable ended;
+  bool done = false;
+  Result result{};
+  std::exception_ptr failure;
+  PyObject *raised_type = nullptr, *raised_value = nullptr, *raised_trace = nullptr;
+  {
+    py::gil_scoped_release free;
+    std::thread worker([&] {
+      try {
+        result = job(stop.get_token());
+      } catch (...) {
+        failure = std::current_exception();
+      }
+      std::lock_guard<std::mutex> lock(mutex);
+      done = true;
+      ended.notify_all();
+    });
+    std::unique_lock<std::mutex> lock(mutex);
+    while (!ended.wait_for(lock, std::chrono::milliseconds(20), [&] { return done; })) {
+      if (stop.stop_requested()) continue;
+      lock.unlock();
+      {
+        py::gil_scoped_acquire gil;
+        if (PyErr_CheckSignals() != 0) {
+          PyErr_Fetch(&raised_type, &raised_value, &raised_trace);
+          stop.request_stop();
+        }
+      }
+      lock.lock();
+    }
+    lock.unlock();
+    worker.join();
+  }
+  if (raised_type) {  // the signal's exception wins over the job's StopRequested
+    PyErr_Restore(raised_type, raised_value, raised_trace);
+    throw py::error_already_set();
+  }
+  if (failure) std::rethrow_exception(failure);
+  return result;
+}
+
 offline::JobResult run_job(const case_file::Case& c, offline::JobKind kind, const std::filesystem::path& out, bool resume, int stop_after, int threads,
                            int frames, bool quiet, const std::function<bool(std::size_t, std::size_t)>& progress) {
   offline::JobOptions o;
@@ -75,8 +131,17 @@ offline::JobResult run_job(const case_file::Case& c, offline::JobKind kind, cons
       py::gil_scoped_acquire gil;
       return progress(saved, total);
     };
-  py::gil_scoped_release free;
-  return offline::run_job(c, kind, o);
+  return run_interruptible<offline::JobResult>([&](std::stop_token stop) {
+    offline::JobOptions with_stop = o;
+    with_stop.stop = stop;
+    return offline::run_job(c, kind, with_stop);
+  });
+}
+
+loop::RunOptions run_options(const std::filesystem::path& out, bool quiet, int threads, std::stop_token stop) {
+  loop::RunOptions o;
+  o.out = out, o.quiet = quiet, o.threads = threads, o.stop = stop;
+  return o;
 }
 
 // The closed loop's simulated machine, with the truth it plays (loop/closed_loop_setup.hpp).
@@ -125,7 +190,8 @@ PYBIND11_MODULE(drom, m) {
   // ---- the offline job ----------------------------------------------------------------------
   const char* job_doc =
       "Runs (or resumes) the job; returns {'finished', 'stations', 'stations_saved', 'summary'}. progress(saved, total) is called after each "
-      "station; returning False stops the job (resume later). The GIL is released while it runs.";
+      "station; returning False stops the job (resume later). The GIL is released while it runs; Ctrl-C stops it after the stations in "
+      "progress (KeyboardInterrupt), its checkpoints resumable with resume=True.";
   m.def(
       "run_offline",
       [](const case_file::Case& c, const std::filesystem::path& out, bool resume, int stop_after, int threads, int frames, bool quiet,
@@ -272,32 +338,28 @@ PYBIND11_MODULE(drom, m) {
   m.def(
       "prepare_closed_loop",
       [](const case_file::Case& c, const std::filesystem::path& out, bool quiet, int threads) {
-        py::gil_scoped_release free;
-        return std::make_shared<loop::ClosedLoopInputs>(loop::prepare_closed_loop(c, {out, quiet, threads}));
+        return run_interruptible<std::shared_ptr<loop::ClosedLoopInputs>>([&](std::stop_token stop) {
+          return std::make_shared<loop::ClosedLoopInputs>(loop::prepare_closed_loop(c, run_options(out, quiet, threads, stop)));
+        });
       },
       py::arg("case"), py::arg("out"), py::arg("quiet") = true, py::arg("threads") = 0,
-      "The offline, truth and model stages of drom run under out (computed, or reused while their case is unchanged)");
+      "The offline, truth and model stages of drom run under out (computed, or reused while their case is unchanged); Ctrl-C stops them");
   m.def("predictor_settings", &loop::predictor_settings, py::arg("case"), py::arg("model"), "The predictor's settings as drom run takes them from the case");
   m.def(
       "run_closed_loop",
       [](const case_file::Case& c, const std::filesystem::path& out, bool quiet, int threads) {
-        nlohmann::json summary;
-        {
-          py::gil_scoped_release free;
-          summary = loop::run_closed_loop(c, {out, quiet, threads}).summary;
-        }
+        const nlohmann::json summary = run_interruptible<nlohmann::json>(
+            [&](std::stop_token stop) { return loop::run_closed_loop(c, run_options(out, quiet, threads, stop)).summary; });
         return to_python(summary);
       },
-      py::arg("case"), py::arg("out"), py::arg("quiet") = true, py::arg("threads") = 0, "drom run: returns its summary");
+      py::arg("case"), py::arg("out"), py::arg("quiet") = true, py::arg("threads") = 0,
+      "drom run: returns its summary. Ctrl-C stops it within a second (KeyboardInterrupt); a rerun resumes its stages from their checkpoints");
 
   m.def(
       "run_study",
       [](const case_file::Case& base, const std::string& parameter, const std::vector<double>& values, const std::filesystem::path& out, bool quiet, int threads) {
-        nlohmann::json summary;
-        {
-          py::gil_scoped_release free;
-          summary = loop::run_study(base, parameter, values, {out, quiet, threads});
-        }
+        const nlohmann::json summary = run_interruptible<nlohmann::json>(
+            [&](std::stop_token stop) { return loop::run_study(base, parameter, values, run_options(out, quiet, threads, stop)); });
         return to_python(summary);
       },
       py::arg("case"), py::arg("parameter"), py::arg("values"), py::arg("out"), py::arg("quiet") = true, py::arg("threads") = 0,

@@ -57,6 +57,26 @@ void remove_quietly(const fs::path& p) {
 
 }  // namespace
 
+void check_output_folder(const fs::path& out) {
+  const std::string shown = out.string();
+  std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec)) throw InputError("--out " + shown + ": a file is there, not a folder");
+  fs::create_directories(out, ec);
+  if (ec) throw InputError("--out " + shown + ": cannot create the folder: " + ec.message());
+  const fs::path probe = out / (".drom_probe_" + std::to_string(::getpid()));
+  {
+    std::ofstream f(probe);
+    f << "drom checks the folder takes files\n";
+    f.flush();
+    if (!f) {
+      const std::string reason = std::strerror(errno);
+      fs::remove(probe, ec);
+      throw InputError("--out " + shown + ": cannot write in it: " + reason);
+    }
+  }
+  fs::remove(probe, ec);
+}
+
 fs::path partial_folder(const fs::path& out) {
   const fs::path p = normalized(out);
   return p.parent_path() / (p.filename().string() + ".partial");
@@ -90,7 +110,19 @@ RunFolder::RunFolder(fs::path out, const RunFolderOptions& options) : out_(norma
   remove_quietly(ready_);
 
   if (options.resume && fs::is_directory(staging_, ec)) {
+    // Only what the run reuses is taken over: a file the resumed run would not write again (a
+    // program it now refuses, a packet it no longer makes) must not survive beside its files.
     resumed_partial_ = true;
+    std::vector<fs::path> stale;
+    for (const auto& entry : fs::directory_iterator(staging_, ec)) {
+      const std::string name = entry.path().filename().string();
+      const bool reused = std::any_of(options.reused.begin(), options.reused.end(), [&](const std::string& r) { return *fs::path(r).begin() == name; });
+      if (!reused && name != kMarker) stale.push_back(entry.path());
+    }
+    for (const auto& p : stale) {
+      fs::remove_all(p, ec);
+      if (ec) throw InputError("--out " + shown + ": cannot clear " + p.string() + " from a killed run's folder: " + ec.message());
+    }
   } else {
     fs::remove_all(staging_, ec);
     if (ec) throw InputError("--out " + shown + ": cannot clear " + staging_.string() + ", a failed run's folder: " + ec.message());

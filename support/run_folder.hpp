@@ -5,8 +5,9 @@
 // - a run killed or failed midway leaves `<out>` as the last complete run left it, and its own work
 //   in `<out>.partial`, a folder whose name says what it is;
 // - nothing of an earlier run survives beside a new one: `<out>` is always one run's files;
-// - only `--resume` reuses earlier work: the `.partial` folder of a killed run as it is, or else the
-//   entries of `<out>` the command names (hard links, so nothing is copied), nothing more.
+// - only `--resume` reuses earlier work, and only the entries the command names: those of a killed
+//   run's `.partial` folder (the rest of it is cleared), or else those of `<out>` (hard links, so
+//   nothing is copied), nothing more.
 // The constructor checks, before any long work, that the folder can be made and written, and that no
 // other drom is writing it (an advisory lock beside it). A folder is only ever replaced when a drom run
 // wrote it (its `.drom_run` marker) or it is empty: `--out .`, `--out ~` or a folder of the user's own
@@ -19,8 +20,8 @@ namespace drom {
 
 struct RunFolderOptions {
   bool resume = false;
-  // With resume and no `.partial` folder: the entries of the last complete run that the run reuses
-  // (relative paths, e.g. "optimization"); the others are not carried over.
+  // With resume: the entries the run reuses (relative paths, e.g. "optimization"), from a killed
+  // run's `.partial` folder or else from the last complete run; the others are not carried over.
   std::vector<std::string> reused;
   // The run's input files: none may lie inside the folder it replaces.
   std::vector<std::filesystem::path> inputs;
@@ -46,6 +47,11 @@ class RunFolder {
   int lock_fd_ = -1;
   bool resumed_partial_ = false, committed_ = false;
 };
+
+// For the commands that write straight into their folder (support/summary.hpp, clear_earlier_run):
+// makes `out` and checks, before any long work, that it is a folder and takes files. InputError
+// naming --out otherwise (a file in the way, a read-only or full file system).
+void check_output_folder(const std::filesystem::path& out);
 
 // The staging folder of `out`: `<out>.partial`.
 std::filesystem::path partial_folder(const std::filesystem::path& out);

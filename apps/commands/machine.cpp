@@ -43,6 +43,12 @@ int machine_command(const CommandOptions& options) {
     const double v = q["velocity"], a = q["acceleration"], j = q["jerk"];
     if (v + a + j > 0) std::printf("  held by %-3s                  velocity %.1f mm, acceleration %.1f mm, jerk %.1f mm\n", axis.c_str(), v, a, j);
   }
+  for (const char* quantity : {"velocity", "acceleration", "jerk"}) {
+    const auto& d = s["demand_at_programmed_feed"][quantity];
+    if (!d["axis"].get<std::string>().empty())
+      std::printf("  demand at the programmed feed %-12s %.3g x the limit (%s, line %d)\n", quantity, d["ratio"].get<double>(), d["axis"].get<std::string>().c_str(),
+                  d["line"].get<int>());
+  }
   std::printf("  singularity passages         %zu\n", s["singularity_passages"].size());
   if (s["start_assumed"].get<bool>()) std::printf("  note: the first move cuts from an unknown position; it is timed from the program origin\n");
   return 0;

@@ -12,7 +12,9 @@ namespace drom::app {
 namespace {
 
 loop::RunOptions run_options(const CommandOptions& options) {
-  return {options.out, options.quiet, options.threads, options.replan, nullptr};
+  loop::RunOptions run;
+  run.out = options.out, run.quiet = options.quiet, run.threads = options.threads, run.replan = options.replan;
+  return run;
 }
 
 }  // namespace
@@ -29,7 +31,10 @@ int run_command(const CommandOptions& options) {
     return 0;
   }
   const loop::RunResult r = loop::run_closed_loop(c, run);
-  if (options.quiet) return 0;
+  // A corrected program beyond a stroke is not written (exit 3, as drom finish, copy and orient).
+  const int exit_code = r.program_verdict && !r.program_verdict->runnable() ? 3 : 0;
+  if (exit_code != 0) std::fprintf(stderr, "drom run: corrected_program.nc on %s: %s\n", c.sync_machine.c_str(), r.program_verdict->summary_line().c_str());
+  if (options.quiet) return exit_code;
   const loop::Headline& h = r.headline;
   std::printf("drom run: %s (%s scale), model r = %d, %zu passes, sensor noise %.3g mm\n", c.name.c_str(), c.run_scale.c_str(), r.model_rank,
               r.corrected.passes.size(), c.sensor_noise);
@@ -50,9 +55,11 @@ int run_command(const CommandOptions& options) {
     std::printf("  %-52s %.4f mm (the nominal path: %.4f mm)\n", "re-planned finish, max distance to the truth", q["max_distance_to_truth_mm"].get<double>(),
                 q["nominal_max_distance_to_truth_mm"].get<double>());
   }
-  std::printf("  outputs in %s: passes.csv/.png, final_shape_error.png, final_shape.pvd, offsets.csv, corrected_program.nc, summary.json (%.0f s)\n",
-              options.out.string().c_str(), r.summary["timing_s"]["total"].get<double>());
-  return 0;
+  if (r.program_verdict && r.program_verdict->runnable())
+    std::printf("  %-52s %s\n", ("corrected program on " + c.sync_machine).c_str(), r.program_verdict->summary_line().c_str());
+  std::printf("  outputs in %s: passes.csv/.png, final_shape_error.png, final_shape.pvd, offsets.csv, %ssummary.json (%.0f s)\n",
+              options.out.string().c_str(), exit_code == 0 ? "corrected_program.nc, " : "", r.summary["timing_s"]["total"].get<double>());
+  return exit_code;
 }
 
 int study_command(const CommandOptions& options) {

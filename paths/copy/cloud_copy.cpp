@@ -64,7 +64,7 @@ void make_program(PacketOperation& op, const CloudPath& path, const Eigen::Matri
     op.verdict = machine::judge_program(op.gcode, title, kin);
     op.cycle_time = op.verdict->cycle_time;
     if (!op.verdict->runnable()) {
-      op.error = op.verdict->out_of_reach.front();
+      op.error = op.verdict->beyond_strokes.front().what;
       op.gcode.clear();
     }
   } catch (const InputError& e) {

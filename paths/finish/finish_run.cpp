@@ -322,7 +322,7 @@ PostedProgram post_program(const FinishCase& c, const machine::Machine& m, const
       const std::string text = machine::post_process(cl, kinematics, post);
       posted.verdict = machine::judge_program(text, "program.ngc", kinematics);
       if (!posted.verdict->runnable()) {
-        posted.refused = "on " + m.name + ", " + posted.verdict->out_of_reach.front();
+        posted.refused = "on " + m.name + ", " + posted.verdict->beyond_strokes.front().what;
       } else {
         write_file_atomically(out / "program.ngc", text);
         files.push_back("program.ngc");

@@ -684,7 +684,7 @@ OrientResult run_orient(const OrientCase& c, const OrientOptions& options) {
       say("  program.ngc on " + m.name + ": " + verdict.summary_line());
       if (verdict.slows_down()) say("  warning: at its programmed feed the program asks more than the machine's axes give: the machine slows down (the cycle time above is what it reaches)");
     } else {
-      result.unreachable.push_back(verdict.out_of_reach.front());
+      result.unreachable.push_back(verdict.beyond_strokes.front().what);
     }
   }
   if (relaxation) {

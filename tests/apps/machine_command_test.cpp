@@ -43,6 +43,17 @@ TEST(MachineCommand, ThreeAxisProgramWritesItsOutputs) {
   EXPECT_GT(s["share_of_cutting_length_at_programmed_feed"].get<double>(), 0.8);
   EXPECT_TRUE(s["travel_violations"].empty());
   EXPECT_NE(r.output.find("cycle time"), std::string::npos);
+  // The verdict drom gives its own programs (machine/program_verdict.hpp), here too: X and Y at
+  // 3000 mm/min are a tenth of their 30 m/min; a square corner at 50 mm/s stops one axis and starts
+  // the other within the ten interpolation cycles the demand is measured over: 50 mm/s / 20 ms =
+  // 2.5 m/s² (half of 5 m/s²) by central differences, and its jerk, 2.5 m/s² / 20 ms = 125 m/s³,
+  // is 2.5 times the 50 m/s³ limit.
+  const auto& demand = s["demand_at_programmed_feed"];
+  EXPECT_NEAR(demand["velocity"]["ratio"].get<double>(), 0.1, 1e-9) << demand.dump();
+  EXPECT_NEAR(demand["acceleration"]["ratio"].get<double>(), 0.5, 1e-6) << demand.dump();
+  EXPECT_NEAR(demand["jerk"]["ratio"].get<double>(), 2.5, 1e-6) << demand.dump();
+  EXPECT_TRUE(s["slows_down"].get<bool>());
+  EXPECT_NE(r.output.find("demand at the programmed feed jerk"), std::string::npos) << r.output;
 }
 
 TEST(MachineCommand, FiveAxisClFileOnTheTableTableMachine) {

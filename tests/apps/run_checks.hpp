@@ -84,5 +84,10 @@ inline nlohmann::json check_run(const std::string& name, const std::string& args
   text << gcode.rdbuf();
   EXPECT_NE(text.str().find("G1 X"), std::string::npos);
   shop_safe::expect_shop_safe(text.str(), "corrected_program.nc");  // issue 44: ready to run as it is
+  // ... and judged on the [sync] machine before it was written.
+  EXPECT_TRUE(s["program_verdict"]["runnable"].get<bool>()) << s["program_verdict"].dump();
+  EXPECT_EQ(s["program_verdict"]["program"], "corrected_program.nc");
+  EXPECT_GT(s["program_verdict"]["cycle_time_s"].get<double>(), 0.0);
+  EXPECT_NE(r.output.find("corrected program on "), std::string::npos) << r.output;
   return s;
 }

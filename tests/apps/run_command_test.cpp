@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 namespace {
@@ -46,4 +48,46 @@ TEST(StudyCommand, UnknownParameterOrNoValuesIsAClearError) {
   const auto bad_case = run_drom("run --set sensor.period=-1 --out " + (run_test_root() / "bad").string());
   EXPECT_EQ(bad_case.exit_code, 2);
   EXPECT_NE(bad_case.output.find("sensor.period"), std::string::npos) << bad_case.output;
+  // Issue 44: a misspelled machine or an output folder in the way is found before any machining.
+  const auto fresh = run_test_root() / "bad_machine";
+  std::filesystem::remove_all(fresh);
+  const auto bad_machine = run_drom("run --set sync.machine=vmc_3axsi --out " + fresh.string());
+  EXPECT_EQ(bad_machine.exit_code, 2) << bad_machine.output;
+  EXPECT_NE(bad_machine.output.find("vmc_3axsi"), std::string::npos) << bad_machine.output;
+  EXPECT_FALSE(std::filesystem::exists(fresh / "offline"));
+  std::filesystem::create_directories(run_test_root());
+  const auto file = run_test_root() / "a_file";
+  std::ofstream(file) << "in the way\n";
+  const auto in_the_way = run_drom("run --out " + file.string());
+  EXPECT_EQ(in_the_way.exit_code, 2) << in_the_way.output;
+  EXPECT_NE(in_the_way.output.find("--out " + file.string() + ": a file is there"), std::string::npos) << in_the_way.output;
+}
+
+// Issue 44: the corrected program is judged on the [sync] machine before it is written. The flat
+// plate (1 000 mm) does not fit vmc_3axis's 800 x 500 mm table: no program, exit 3, the verdict in
+// summary.json. The rerun on the plate's machine, with its own [program] table, reuses the stages
+// ([program] is no machining key) and posts T7 with flood coolant.
+TEST(RunCommand, ACorrectedProgramBeyondTheMachinesStrokesIsNotWritten) {
+  const auto out = run_test_root() / "verdict";
+  std::filesystem::remove_all(out);
+  const DromResult refused = run_drom("run" + kFlat + " --set sync.machine=vmc_3axis --out " + out.string());
+  EXPECT_EQ(refused.exit_code, 3) << refused.output;
+  EXPECT_NE(refused.output.find("beyond its stroke"), std::string::npos) << refused.output;
+  EXPECT_FALSE(std::filesystem::exists(out / "corrected_program.nc"));
+  const auto s = run_summary(out);
+  EXPECT_FALSE(s["program_verdict"]["runnable"].get<bool>());
+  EXPECT_GT(s["program_verdict"]["out_of_reach_blocks"].get<int>(), 0);
+  for (const auto& f : s["files"]) EXPECT_TRUE(std::filesystem::exists(out / f.get<std::string>())) << f;
+
+  const DromResult posted = run_drom("run" + kFlat + " --set program.tool_number=7 --set program.coolant=flood --quiet --out " + out.string());
+  ASSERT_EQ(posted.exit_code, 0) << posted.output;
+  const auto again = run_summary(out);
+  EXPECT_TRUE(again["reused"]["offline"].get<bool>() && again["reused"]["truth"].get<bool>()) << again["reused"].dump();
+  EXPECT_TRUE(again["program_verdict"]["runnable"].get<bool>());
+  std::ifstream in(out / "corrected_program.nc");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("T7 M6"), std::string::npos);
+  EXPECT_NE(text.find("G43 H7"), std::string::npos);
+  EXPECT_NE(text.find("M8"), std::string::npos);
+  shop_safe::expect_shop_safe(text, "corrected_program.nc");
 }

@@ -66,7 +66,7 @@ TEST_P(ShippedMachine, ForwardOfInverseIsTheIdentityOnBothBranches) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Machines, ShippedMachine, ::testing::Values("vmc_3axis", "ucp710_like", "gantry_head_ac"));
+INSTANTIATE_TEST_SUITE_P(Machines, ShippedMachine, ::testing::Values("vmc_3axis", "bridge_3axis", "ucp710_like", "gantry_head_ac"));
 
 TEST(Kinematics, TableTableBranchesMirrorTheTiltAndTurnCByHalfATurn) {
   const Kinematics kin(load_machine("ucp710_like"));

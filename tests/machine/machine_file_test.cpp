@@ -58,7 +58,17 @@ jerk = 4800
 }  // namespace
 
 TEST(MachineFile, ShippedMachinesLoadWithTheirUnits) {
-  EXPECT_EQ(shipped_machine_names().size(), 3u);
+  EXPECT_EQ(shipped_machine_names().size(), 4u);
+  // The flat plate's machine: vmc_3axis's dynamics on a table the 1 000 mm plate fits.
+  const Machine bridge = load_machine("bridge_3axis"), vmc = load_machine("vmc_3axis");
+  EXPECT_EQ(bridge.chain, KinematicChain::ThreeAxis);
+  for (int j = 0; j < 3; ++j) {
+    EXPECT_EQ(bridge.axes[j].velocity, vmc.axes[j].velocity);
+    EXPECT_EQ(bridge.axes[j].acceleration, vmc.axes[j].acceleration);
+    EXPECT_EQ(bridge.axes[j].jerk, vmc.axes[j].jerk);
+  }
+  EXPECT_EQ(bridge.interpolation_cycle, vmc.interpolation_cycle);
+  EXPECT_TRUE(bridge.axes[0].within(0, 0) && bridge.axes[0].within(1000, 0) && bridge.axes[1].within(0, 0) && bridge.axes[1].within(1000, 0));
   const Machine m = load_machine("ucp710_like");
   EXPECT_EQ(m.chain, KinematicChain::TableTable);
   EXPECT_EQ(m.rotary_letters(), "AC");

@@ -160,6 +160,24 @@ TEST(Offline, ResumedRunWritesTheSameDatabase) {
   EXPECT_TRUE(ba == bb);
 }
 
+// Issue 44: a new job into a finished job's folder clears that job's outputs first (support/summary.hpp),
+// so one stopped midway leaves no database.h5 or summary.json of the earlier one beside its stations.
+TEST(Offline, ARerunStoppedMidwayLeavesNothingOfTheFinishedJobBefore) {
+  const auto out = dir("rerun_stopped");
+  ASSERT_EQ(run("truth" + kPlate + " --out " + out.string()), "");
+  ASSERT_TRUE(std::filesystem::exists(out / "database.h5") && std::filesystem::exists(out / "summary.json"));
+  std::filesystem::create_directories(out / "mine");
+  std::ofstream(out / "mine" / "notes.txt") << "the user's\n";
+  ASSERT_EQ(run("truth" + kPlate + " --stop-after 2 --out " + out.string()), "");
+  EXPECT_FALSE(std::filesystem::exists(out / "database.h5"));
+  EXPECT_FALSE(std::filesystem::exists(out / "summary.json"));
+  EXPECT_FALSE(std::filesystem::exists(out / "frames"));
+  EXPECT_TRUE(std::filesystem::exists(out / ".checkpoint"));
+  EXPECT_TRUE(std::filesystem::exists(out / "mine" / "notes.txt"));  // not the earlier job's
+  ASSERT_EQ(run("truth" + kPlate + " --resume --out " + out.string()), "");
+  EXPECT_TRUE(std::filesystem::exists(out / "database.h5"));
+}
+
 TEST(Offline, StationInterpolationErrorIsBounded) {
   // Stations every 300 mm, and every 150 mm (which adds the midpoints): interpolate the coarse run
   // linearly in time at the fine run's extra stations.

@@ -5,6 +5,7 @@ folder."""
 import os
 import pathlib
 import shutil
+import signal
 import subprocess
 import threading
 import time
@@ -86,6 +87,54 @@ def test_progress_stops_a_job_that_then_resumes_and_the_gil_is_free_meanwhile():
 
     with pytest.raises(RuntimeError, match="stop from Python"):
         drom.run_offline(case, str(fresh("offline_raising")), progress=failing)
+
+
+def test_ctrl_c_stops_the_offline_job_within_a_second_and_resume_finishes_it_to_the_same_bytes(coarse_job):
+    """Issue 44: a KeyboardInterrupt (SIGINT, as Ctrl-C sends it) ends drom.run_offline after the
+    stations in progress, and resume=True then writes the bytes an uninterrupted job writes."""
+    case = drom.load_case(None, COARSE)
+    out = fresh("offline_interrupted")
+    sent = []
+
+    def progress(saved, total):
+        if saved == 2 and not sent:
+            sent.append(time.monotonic())
+            os.kill(os.getpid(), signal.SIGINT)
+        return True
+
+    with pytest.raises(KeyboardInterrupt):
+        drom.run_offline(case, str(out), threads=1, progress=progress)
+    stopped_after = time.monotonic() - sent[0]
+    assert stopped_after < 1.0, f"the job went on for {stopped_after:.2f} s after Ctrl-C"
+    stations = coarse_job[1]["stations"]
+    saved = len(list((out / ".checkpoint").glob("station_*.bin")))
+    assert 2 <= saved < stations, f"{saved} of {stations} stations saved: the interrupt did not stop the job midway"
+    assert not (out / "database.h5").exists() and not (out / "summary.json").exists()
+    with pytest.raises(drom.InputError, match="pass --resume"):
+        drom.run_offline(case, str(out))  # a plain rerun does not take the interrupted job's stations
+    result = drom.run_offline(case, str(out), resume=True)
+    assert result["finished"] and result["stations_saved"] == stations
+    assert (out / "database.h5").read_bytes() == (coarse_job[0] / "database.h5").read_bytes()
+
+
+def test_ctrl_c_stops_a_closed_loop_run_within_a_second():
+    """The same for drom.run_closed_loop, wherever the signal lands: its stages, the reduction or
+    the loop (a timer from another thread, as a terminal's Ctrl-C comes from outside)."""
+    case = drom.load_run_case(None, COARSE)
+    for delay in (0.3, 15.0):  # in the machining stages; in the loop (they take some 5-13 s here)
+        out = fresh(f"loop_interrupted_{delay}")
+        sent = []
+        timer = threading.Timer(delay, lambda: (sent.append(time.monotonic()), os.kill(os.getpid(), signal.SIGINT)))
+        timer.start()
+        try:
+            with pytest.raises(KeyboardInterrupt):
+                drom.run_closed_loop(case, str(out))
+        finally:
+            timer.cancel()
+        assert sent, "the run ended before the signal"
+        stopped_after = time.monotonic() - sent[0]
+        assert stopped_after < 1.0, f"drom run went on for {stopped_after:.2f} s after Ctrl-C at {delay} s"
+        assert not (out / "summary.json").exists()
 
 
 @pytest.fixture(scope="module")

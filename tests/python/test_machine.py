@@ -21,7 +21,7 @@ def saddle_pass(tilt_deg, step=0.1):
 
 
 def test_shipped_machines_and_bad_keys():
-    assert set(drom.machine.shipped()) == {"vmc_3axis", "ucp710_like", "gantry_head_ac"}
+    assert set(drom.machine.shipped()) == {"vmc_3axis", "bridge_3axis", "ucp710_like", "gantry_head_ac"}
     m = drom.machine.load("ucp710_like")
     assert m.kinematics == "table_table" and m.rotary_axes == "AC"
     with pytest.raises(drom.InputError, match="axes.X.velocity"):

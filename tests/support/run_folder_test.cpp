@@ -4,6 +4,7 @@
 // (a file in the way, another writer) found when the run starts.
 #include "support/input_error.hpp"
 #include "support/run_folder.hpp"
+#include "support/summary.hpp"
 
 #include <gtest/gtest.h>
 
@@ -84,12 +85,17 @@ TEST(RunFolder, ResumeTakesUpAKilledRunOrReusesOnlyTheNamedEntries) {
     EXPECT_EQ(text(resumed.staging() / "optimization" / "K2.json"), "k2\n");
     EXPECT_FALSE(fs::exists(resumed.staging() / "summary.json"));
     EXPECT_EQ(fs::hard_link_count(resumed.staging() / "optimization" / "K2.json"), 2u);  // linked, not copied
-    put(resumed.staging() / "optimization" / "K3.json", "k3\n");  // then killed
+    put(resumed.staging() / "optimization" / "K3.json", "k3\n");
+    put(resumed.staging() / "program.ngc", "refused now\n");  // then killed
+    put(resumed.staging() / "packet_2" / "finishing.ngc", "stale\n");
   }
   {
     RunFolder again(out, {.resume = true, .reused = {"optimization"}, .inputs = {}});
     EXPECT_TRUE(again.resumed_partial());
     EXPECT_EQ(text(again.staging() / "optimization" / "K3.json"), "k3\n");
+    // What the killed run wrote outside the reused entries is not taken over.
+    EXPECT_FALSE(fs::exists(again.staging() / "program.ngc"));
+    EXPECT_FALSE(fs::exists(again.staging() / "packet_2"));
     again.commit();
   }
   EXPECT_TRUE(fs::exists(out / "optimization" / "K3.json"));
@@ -117,5 +123,31 @@ TEST(RunFolder, AFileInTheWayOrAnotherWriterIsAnErrorAtTheStart) {
     EXPECT_NE(std::string(e.what()).find("another drom is writing this folder"), std::string::npos) << e.what();
   }
   EXPECT_THROW(RunFolder("/"), drom::InputError);
+  fs::remove_all(scratch());
+}
+
+// The distortion chain's commands write straight into their folder: a new run clears the earlier
+// run's summary.json first, then the files it lists, and nothing else.
+TEST(EarlierRun, ItsSummaryGoesFirstThenTheFilesItListsAndNothingElse) {
+  const fs::path out = scratch() / "chain";
+  put(out / "summary.json", R"({"command": "run", "files": ["passes.csv", "frames", "../outside.txt", "/etc/hostname", "summary.json"]})");
+  put(out / "passes.csv", "old\n");
+  put(out / "frames" / "station_00001.vtu", "old\n");
+  put(out / "offline" / "database.h5", "a cache under its own key\n");
+  put(out / "notes.txt", "the user's\n");
+  put(scratch() / "outside.txt", "not the run's folder\n");
+  drom::clear_earlier_run(out);
+  EXPECT_FALSE(fs::exists(out / "summary.json"));
+  EXPECT_FALSE(fs::exists(out / "passes.csv"));
+  EXPECT_FALSE(fs::exists(out / "frames"));
+  EXPECT_TRUE(fs::exists(out / "offline" / "database.h5"));
+  EXPECT_TRUE(fs::exists(out / "notes.txt"));
+  EXPECT_TRUE(fs::exists(scratch() / "outside.txt"));
+  // A summary.json drom did not write (no "command") is not drom's to clear.
+  put(out / "summary.json", R"({"files": ["notes.txt"]})");
+  drom::clear_earlier_run(out);
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+  EXPECT_TRUE(fs::exists(out / "notes.txt"));
+  drom::clear_earlier_run(scratch() / "nothing_here");  // no folder: nothing to do
   fs::remove_all(scratch());
 }
