@@ -115,7 +115,7 @@ void add_reduce(CLI::App& cmd, Arguments& a) {
 
 void add_copy(CLI::App& cmd, Arguments& a) {
   CommandOptions& o = a.options;
-  cmd.add_option("cloud", a.case_path, "the scanned cloud: XYZ/CSV (x y z [nx ny nz]) or PLY (ascii or binary)")->required();
+  cmd.add_option("cloud", a.case_path, "the scanned cloud: XYZ/CSV (x y z [nx ny nz]), PLY (ascii or binary) or PCD (ascii, binary or binary_compressed)")->required();
   cmd.add_option("--settings", o.settings, "settings file (TOML; docs/case-files.md, \"drom copy\"); default: the seed's hip run");
   cmd.add_option("--tool", o.tool, "finishing tool: ball:D, torus:D:r or flat:D (mm); default: the settings' (ball:6)");
   cmd.add_option("--machine", o.copy_machine, "machine file (TOML) or shipped machine; default: the settings' (ucp710_like)");

@@ -1,6 +1,7 @@
-// Harness: a point cloud (geometry/cloud_reader.hpp) as drom copy reads it: XYZ/CSV text, or PLY
-// (ascii, binary little- and big-endian) when the bytes start with "ply". Seeds: a sphere cap sampled
-// with and without normals, in each format.
+// Harness: a point cloud (geometry/cloud_reader.hpp) as drom copy reads it: XYZ/CSV text, PLY
+// (ascii, binary little- and big-endian) when the bytes start with "ply", or PCD (ascii, binary,
+// binary_compressed) when they start with its header. Seeds: a sphere cap sampled with and without
+// normals, in each format, and a two-point compressed PCD.
 #include "fuzz/fuzz_input.hpp"
 #include "geometry/cloud_reader.hpp"
 

@@ -39,6 +39,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <cstdint>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -236,6 +237,32 @@ int main(int argc, char** argv) {
     }
     put(corpus / "cloud" / "cap.xyz", xyz.str());
     put(corpus / "cloud" / "cap_normals.csv", csv.str());
+    // PCD (issue 45): ascii with normals, binary float32 without, and a binary_compressed of two
+    // points whose LZF stream holds a literal run and a back-reference.
+    {
+      const std::string fields = "FIELDS x y z normal_x normal_y normal_z\nSIZE 4 4 4 4 4 4\nTYPE F F F F F F\nCOUNT 1 1 1 1 1 1\n";
+      std::ostringstream ascii, binary;
+      ascii << "# .PCD v0.7\nVERSION 0.7\n" << fields << "WIDTH " << cap.size() << "\nHEIGHT 1\nPOINTS " << cap.size() << "\nDATA ascii\n";
+      binary << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH " << cap.size() << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << cap.size() << "\nDATA binary\n";
+      for (std::size_t i = 0; i < cap.size(); ++i) {
+        ascii << cap.points[i].x() << " " << cap.points[i].y() << " " << cap.points[i].z() << " " << cap.normals[i].x() << " " << cap.normals[i].y() << " " << cap.normals[i].z() << "\n";
+        for (int k = 0; k < 3; ++k) {
+          const auto v = static_cast<float>(cap.points[i][k]);
+          binary.write(reinterpret_cast<const char*>(&v), sizeof v);
+        }
+      }
+      put(corpus / "cloud" / "cap_ascii.pcd", ascii.str());
+      put(corpus / "cloud" / "cap_binary.pcd", binary.str());
+      const float one = 1.0f, two = 2.0f;
+      std::string z(1, '\x07');  // 8 literal bytes: x of both points
+      for (int k = 0; k < 2; ++k) z.append(reinterpret_cast<const char*>(&one), 4);
+      z.append("\xc0\x07", 2);  // 8 bytes from 8 back: y = x
+      z.push_back('\x07');
+      for (int k = 0; k < 2; ++k) z.append(reinterpret_cast<const char*>(&two), 4);
+      const std::uint32_t sizes[2] = {static_cast<std::uint32_t>(z.size()), 24u};
+      put(corpus / "cloud" / "two_compressed.pcd",
+          "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nPOINTS 2\nDATA binary_compressed\n" + std::string(reinterpret_cast<const char*>(sizes), 8) + z);
+    }
     TColgp_Array2OfPnt poles(1, 3, 1, 3);
     for (int i = 1; i <= 3; ++i)
       for (int j = 1; j <= 3; ++j) poles.SetValue(i, j, gp_Pnt(40.0 * (i - 1), 22.5 * (j - 1), (i == 2 && j == 2) ? 30.0 : 5.0 * i));

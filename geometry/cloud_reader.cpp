@@ -7,6 +7,7 @@
 #include <bit>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -527,8 +528,256 @@ PointCloud parse_ply(std::string_view bytes, const std::string& origin, const Cl
   return cloud;
 }
 
+// ---- PCD (the Point Cloud Library's format, v0.5 to v0.7) -----------------------------------
+
+namespace {
+
+struct PcdField {
+  std::string name;
+  std::size_t size = 0;   // bytes per value: 1, 2, 4 or 8
+  char type = 'F';        // I (signed), U (unsigned), F (float)
+  std::size_t count = 1;  // values per point
+  std::size_t offset = 0; // bytes from the start of a point (binary), or values before it (ascii)
+};
+
+double pcd_value(const char* data, const PcdField& f) {
+  auto get = [&](auto v) {
+    std::memcpy(&v, data, sizeof v);  // PCD is little-endian, as every machine drom builds on
+    return static_cast<double>(v);
+  };
+  if (f.type == 'F') return f.size == 4 ? get(float{}) : get(double{});
+  if (f.type == 'I') return f.size == 1 ? get(std::int8_t{}) : f.size == 2 ? get(std::int16_t{}) : f.size == 4 ? get(std::int32_t{}) : get(std::int64_t{});
+  return f.size == 1 ? get(std::uint8_t{}) : f.size == 2 ? get(std::uint16_t{}) : f.size == 4 ? get(std::uint32_t{}) : get(std::uint64_t{});
+}
+
+// LZF (liblzf's format, as PCL's binary_compressed writes it): a control byte below 32 starts a run
+// of that many + 1 literal bytes; above, a back-reference of (ctrl >> 5) + 2 bytes (7: plus the next
+// byte) that many + 1 bytes back (the low 5 bits, then the next byte). Every read and write bounded.
+std::string lzf_decompress(std::string_view in, std::size_t expected, const std::string& origin, std::size_t at) {
+  std::string out;
+  out.reserve(expected);
+  std::size_t i = 0;
+  while (i < in.size()) {
+    const auto ctrl = static_cast<unsigned char>(in[i++]);
+    if (ctrl < 32) {
+      const std::size_t run = ctrl + 1u;
+      if (run > in.size() - i) fail_at_byte(origin, at + i, "the compressed data ends inside a literal run");
+      if (run > expected - out.size()) fail_at_byte(origin, at + i, "the compressed data holds more than the uncompressed size its header gives");
+      out.append(in.substr(i, run));
+      i += run;
+      continue;
+    }
+    std::size_t length = ctrl >> 5;
+    if (length == 7) {
+      if (i >= in.size()) fail_at_byte(origin, at + i, "the compressed data ends inside a back-reference");
+      length += static_cast<unsigned char>(in[i++]);
+    }
+    if (i >= in.size()) fail_at_byte(origin, at + i, "the compressed data ends inside a back-reference");
+    const std::size_t back = ((ctrl & 0x1fu) << 8) + static_cast<unsigned char>(in[i++]) + 1;
+    length += 2;
+    if (back > out.size()) fail_at_byte(origin, at + i, "a back-reference before the start of the data");
+    if (length > expected - out.size()) fail_at_byte(origin, at + i, "the compressed data holds more than the uncompressed size its header gives");
+    for (std::size_t k = 0; k < length; ++k) out.push_back(out[out.size() - back]);  // may overlap what it writes
+  }
+  if (out.size() != expected)
+    fail_at_byte(origin, at + i, "the compressed data gives " + std::to_string(out.size()) + " bytes, the header " + std::to_string(expected));
+  return out;
+}
+
+}  // namespace
+
+PointCloud parse_pcd(std::string_view bytes, const std::string& origin, const CloudReadOptions& options) {
+  PointCloud cloud;
+  cloud.origin = origin;
+  std::vector<PcdField> fields;
+  std::vector<std::string_view> sizes, types, counts;
+  std::uint64_t width = 0, height = 1, points = 0;
+  bool has_width = false, has_points = false;
+  std::string data;
+  std::size_t position = 0, line_no = 0, fields_line = 0, count_line = 0;
+  auto count_of = [&](std::string_view token, const std::string& key) {
+    const auto v = parse_number(token);
+    if (!v || *v < 0 || *v != std::floor(*v) || *v > 1e12) fail_at_line(origin, line_no, key + ": expected a whole number, got '" + shown(token) + "'");
+    return static_cast<std::uint64_t>(*v);
+  };
+  std::vector<std::string_view> tokens;
+  while (data.empty()) {
+    if (position >= bytes.size()) fail_at_line(origin, line_no, "the header ends before its DATA line");
+    const std::size_t end = std::min(bytes.find('\n', position), bytes.size());
+    const std::string_view raw = bytes.substr(position, end - position);
+    position = end + 1;
+    ++line_no;
+    const std::string_view line = raw.substr(0, raw.find('#'));
+    split_line(line, tokens);
+    if (tokens.empty()) continue;
+    const std::string key = lower(tokens.front());
+    const std::vector<std::string_view> values(tokens.begin() + 1, tokens.end());
+    if (key == "version" || key == "viewpoint") continue;
+    if (key == "fields") {
+      fields_line = line_no;
+      for (auto v : values) fields.push_back({lower(v)});
+    } else if (key == "size") {
+      sizes = values;
+    } else if (key == "type") {
+      types = values;
+    } else if (key == "count") {
+      counts = values;
+    } else if (key == "width") {
+      width = values.size() == 1 ? count_of(values[0], "WIDTH") : 0, has_width = values.size() == 1;
+      if (!has_points) count_line = line_no;
+    } else if (key == "height") {
+      height = values.size() == 1 ? count_of(values[0], "HEIGHT") : 0;
+    } else if (key == "points") {
+      points = values.size() == 1 ? count_of(values[0], "POINTS") : 0, has_points = values.size() == 1;
+      count_line = line_no;
+    } else if (key == "data") {
+      data = values.size() == 1 ? lower(values[0]) : "?";
+      if (data != "ascii" && data != "binary" && data != "binary_compressed")
+        fail_at_line(origin, line_no, "DATA: expected ascii, binary or binary_compressed, got " + shown(line));
+    } else {
+      fail_at_line(origin, line_no, "expected a PCD header line (VERSION, FIELDS, SIZE, TYPE, COUNT, WIDTH, HEIGHT, VIEWPOINT, POINTS, DATA), got " + shown(raw));
+    }
+  }
+  const std::size_t data_line = line_no;
+  if (fields.empty()) fail_at_line(origin, data_line, "the header has no FIELDS line");
+  if (sizes.size() != fields.size() || types.size() != fields.size() || (!counts.empty() && counts.size() != fields.size()))
+    fail_at_line(origin, fields_line, "FIELDS names " + std::to_string(fields.size()) + " fields, SIZE " + std::to_string(sizes.size()) + ", TYPE " +
+                                          std::to_string(types.size()) + (counts.empty() ? std::string() : ", COUNT " + std::to_string(counts.size())) + ": one each expected");
+  if (static_cast<double>(width) * static_cast<double>(height) > 1e12) fail_at_line(origin, data_line, "WIDTH x HEIGHT is over 10^12 points");
+  if (!has_points) {
+    if (!has_width) fail_at_line(origin, data_line, "the header gives neither POINTS nor WIDTH");
+    points = width * height;
+  }
+  if (has_width && width * height != points)
+    fail_at_line(origin, data_line, "POINTS " + std::to_string(points) + " is not WIDTH x HEIGHT = " + std::to_string(width * height));
+  std::size_t stride = 0, values_per_point = 0;
+  int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1;
+  for (std::size_t k = 0; k < fields.size(); ++k) {
+    PcdField& f = fields[k];
+    const auto size = parse_number(sizes[k]);
+    const std::string type = lower(types[k]);
+    if (!size || (*size != 1 && *size != 2 && *size != 4 && *size != 8)) fail_at_line(origin, fields_line, "field " + f.name + ": SIZE must be 1, 2, 4 or 8");
+    if (type != "i" && type != "u" && type != "f") fail_at_line(origin, fields_line, "field " + f.name + ": TYPE must be I, U or F");
+    f.size = static_cast<std::size_t>(*size), f.type = static_cast<char>(std::toupper(type[0]));
+    if (f.type == 'F' && f.size != 4 && f.size != 8) fail_at_line(origin, fields_line, "field " + f.name + ": a float (F) has SIZE 4 or 8");
+    f.count = counts.empty() ? 1 : static_cast<std::size_t>(count_of(counts[k], "COUNT"));
+    if (f.count == 0 || f.count > 100000) fail_at_line(origin, fields_line, "field " + f.name + ": COUNT must be 1 to 100000");
+    f.offset = data == "ascii" ? values_per_point : stride;
+    stride += f.size * f.count, values_per_point += f.count;
+    int* slot = f.name == "x" ? &ix : f.name == "y" ? &iy : f.name == "z" ? &iz : f.name == "normal_x" ? &inx : f.name == "normal_y" ? &iny : f.name == "normal_z" ? &inz : nullptr;
+    if (!slot) continue;
+    if (*slot >= 0) fail_at_line(origin, fields_line, "field " + f.name + " is named twice");
+    if (f.count != 1) fail_at_line(origin, fields_line, "field " + f.name + ": COUNT must be 1");
+    *slot = static_cast<int>(k);
+  }
+  if (ix < 0 || iy < 0 || iz < 0) fail_at_line(origin, fields_line, "FIELDS must name x, y and z");
+  const int normal_fields = (inx >= 0) + (iny >= 0) + (inz >= 0);
+  if (normal_fields != 0 && normal_fields != 3) fail_at_line(origin, fields_line, "FIELDS names some of normal_x, normal_y, normal_z: all three or none");
+  const bool with_normals = normal_fields == 3;
+  auto add = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& n, std::size_t where, bool binary, std::uint64_t i) {
+    if (!p.allFinite() || !n.allFinite()) {
+      drop_not_finite(cloud, options, origin, where, binary, "point " + std::to_string(i) + (p.allFinite() ? " has a normal" : " has a coordinate") + " that is not a finite number");
+      return;
+    }
+    cloud.points.push_back(p);
+    if (with_normals) {
+      cloud.normals.emplace_back();
+      check_unit_normal(origin, where, binary, n, cloud.normals.back());
+    }
+  };
+  if (data == "ascii") {
+    std::uint64_t read = 0;
+    std::vector<double> v(values_per_point);
+    while (position < bytes.size()) {
+      const std::size_t end = std::min(bytes.find('\n', position), bytes.size());
+      const std::string_view line = bytes.substr(position, end - position);
+      position = end + 1;
+      ++line_no;
+      split_line(line, tokens);
+      if (tokens.empty()) continue;
+      if (read == points)
+        fail_at_line(origin, line_no, "a point beyond the " + std::to_string(points) + " the header declares (line " + std::to_string(count_line) +
+                                          "): the count is wrong, or two files were joined");
+      if (tokens.size() != values_per_point)
+        fail_at_line(origin, line_no, "expected " + std::to_string(values_per_point) + " values (the header's fields and counts), got " + std::to_string(tokens.size()));
+      for (std::size_t k = 0; k < values_per_point; ++k) {
+        const auto value = parse_number(tokens[k]);
+        if (!value) fail_at_line(origin, line_no, shown(tokens[k]) + " is not a number");
+        v[k] = *value;
+      }
+      auto at = [&](int k) { return v[fields[static_cast<std::size_t>(k)].offset]; };
+      add({at(ix), at(iy), at(iz)}, with_normals ? Eigen::Vector3d(at(inx), at(iny), at(inz)) : Eigen::Vector3d::Zero(), line_no, false, read);
+      ++read;
+    }
+    if (read != points)
+      fail_at_line(origin, line_no, "the file holds " + std::to_string(read) + " points, the header (line " + std::to_string(count_line) + ") " + std::to_string(points));
+    require_points(cloud, origin);
+    return cloud;
+  }
+  // Binary: the points one after another, each its fields in order. Compressed: LZF over the fields
+  // one after another (every point's x, then every y, ...), as PCL writes it.
+  if (stride == 0 || points > (std::numeric_limits<std::size_t>::max() / stride)) fail_at_line(origin, data_line, "the points' size overflows");
+  const std::size_t total = static_cast<std::size_t>(points) * stride;
+  std::string_view body;
+  std::string decompressed;
+  const std::size_t body_at = position;
+  if (data == "binary") {
+    if (bytes.size() < position || bytes.size() - position < total)
+      fail_at_byte(origin, std::min(bytes.size(), position), "the data ends before the " + std::to_string(points) + " points of " + std::to_string(stride) + " bytes the header declares");
+    if (bytes.size() - position > total)
+      fail_at_byte(origin, position + total, std::to_string(bytes.size() - position - total) + " bytes after the " + std::to_string(points) +
+                                                 " points the header declares: the header's count is wrong, or two files were joined");
+    body = bytes.substr(position, total);
+  } else {
+    if (bytes.size() < position || bytes.size() - position < 8) fail_at_byte(origin, std::min(bytes.size(), position), "the compressed data has no sizes");
+    std::uint32_t compressed = 0, uncompressed = 0;
+    std::memcpy(&compressed, bytes.data() + position, 4);
+    std::memcpy(&uncompressed, bytes.data() + position + 4, 4);
+    if (uncompressed != total)
+      fail_at_byte(origin, position + 4, "the uncompressed size " + std::to_string(uncompressed) + " is not the " + std::to_string(points) + " points of " + std::to_string(stride) + " bytes the header declares");
+    if (bytes.size() - position - 8 < compressed) fail_at_byte(origin, position, "the compressed data (" + std::to_string(compressed) + " bytes) runs past the end of the file");
+    if (bytes.size() - position - 8 > compressed)
+      fail_at_byte(origin, position + 8 + compressed, std::to_string(bytes.size() - position - 8 - compressed) + " bytes after the compressed data");
+    decompressed = total == 0 ? std::string() : lzf_decompress(bytes.substr(position + 8, compressed), total, origin, position + 8);
+    body = decompressed;
+  }
+  const bool by_field = data == "binary_compressed";
+  auto value_of = [&](int k, std::uint64_t i) {
+    const PcdField& f = fields[static_cast<std::size_t>(k)];
+    const std::size_t at = by_field ? static_cast<std::size_t>(points) * f.offset + static_cast<std::size_t>(i) * f.size : static_cast<std::size_t>(i) * stride + f.offset;
+    return pcd_value(body.data() + at, f);
+  };
+  for (std::uint64_t i = 0; i < points; ++i) {
+    const std::size_t where = by_field ? body_at : body_at + static_cast<std::size_t>(i) * stride;
+    add({value_of(ix, i), value_of(iy, i), value_of(iz, i)}, with_normals ? Eigen::Vector3d(value_of(inx, i), value_of(iny, i), value_of(inz, i)) : Eigen::Vector3d::Zero(), where,
+        true, i);
+  }
+  require_points(cloud, origin);
+  return cloud;
+}
+
+namespace {
+
+// A PCD header: its first line that is not a comment ('#') starts with VERSION or FIELDS.
+bool looks_like_pcd(std::string_view bytes) {
+  std::size_t position = 0;
+  while (position < bytes.size()) {
+    const std::size_t end = std::min(bytes.find('\n', position), bytes.size());
+    std::string_view line = bytes.substr(position, end - position);
+    position = end + 1;
+    const std::size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string_view::npos || line[first] == '#') continue;
+    line = line.substr(first);
+    return line.starts_with("VERSION") || line.starts_with("FIELDS");
+  }
+  return false;
+}
+
+}  // namespace
+
 PointCloud parse_cloud(std::string_view bytes, const std::string& origin, const CloudReadOptions& options) {
   if (bytes.starts_with("ply\n") || bytes.starts_with("ply\r\n")) return parse_ply(bytes, origin, options);
+  if (looks_like_pcd(bytes)) return parse_pcd(bytes, origin, options);
   return parse_xyz(bytes, origin, options);
 }
 

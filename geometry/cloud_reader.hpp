@@ -1,6 +1,6 @@
 #pragma once
 // Point clouds read from the files scanners and their software write: XYZ text (any of space, tab,
-// comma or semicolon between columns, so CSV too) and PLY (ascii, binary little- and big-endian).
+// comma or semicolon between columns, so CSV too), PLY (ascii, binary little- and big-endian) and PCD.
 // Every entry point takes the bytes and the name of where they came from, so a fuzzer can call it
 // directly. Malformed input throws InputError naming the origin, the line (text) or the byte offset
 // (binary) and what was expected; it never crashes and never yields a silently wrong cloud: missing
@@ -15,6 +15,12 @@
 // the same number of columns.
 // PLY: the "vertex" element's x, y, z (any numeric type) and nx, ny, nz when present; other elements
 // (faces, ...) and properties are skipped, list properties included.
+// PCD (the Point Cloud Library's format, v0.5-0.7; written by PCL, CloudCompare, many scanners'
+// software): DATA ascii, binary or binary_compressed (LZF over the fields one after another), fields x,
+// y, z and normal_x, normal_y, normal_z when present, any SIZE/TYPE/COUNT; the others (rgb,
+// intensity, curvature, ...) skipped. POINTS must be WIDTH x HEIGHT and match the data, either way.
+// An organised cloud's NaN points (no return) are dropped and counted like any other. Read by drom
+// itself: the format is a header and a table, and PCL's reader would bring PCL's 300 MB of packages.
 #include "geometry/point_cloud.hpp"
 
 #include <filesystem>
@@ -29,7 +35,9 @@ struct CloudReadOptions {
 
 PointCloud parse_xyz(std::string_view text, const std::string& origin, const CloudReadOptions& options = {});
 PointCloud parse_ply(std::string_view bytes, const std::string& origin, const CloudReadOptions& options = {});
-// PLY when the bytes start with "ply", XYZ text otherwise.
+PointCloud parse_pcd(std::string_view bytes, const std::string& origin, const CloudReadOptions& options = {});
+// PLY when the bytes start with "ply", PCD when the first line that is not a comment starts with
+// VERSION or FIELDS, XYZ text otherwise.
 PointCloud parse_cloud(std::string_view bytes, const std::string& origin, const CloudReadOptions& options = {});
 
 // A file by its content (see parse_cloud); every coordinate multiplied by `scale` (the seed scaled its

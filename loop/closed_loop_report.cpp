@@ -71,7 +71,11 @@ std::string corrected_gcode(const reduce::LightModel& model, const std::vector<o
   auto offset_at = [&](double t) {
     const auto k = command_before(t);
     if (k == offsets.end()) return 0.0;
-    const double before = k == offsets.begin() ? 0.0 : std::prev(k)->offset, ramp = ramp_of(k);
+    // Several commands can share a believed time (the reckoning holds it at a waypoint until the
+    // next edge): the step is from the last one before that time to the last one at it.
+    auto earlier = k;
+    while (earlier != offsets.begin() && std::prev(earlier)->believed_time == k->believed_time) --earlier;
+    const double before = earlier == offsets.begin() ? 0.0 : std::prev(earlier)->offset, ramp = ramp_of(k);
     const double f = ramp > 0 ? std::clamp((t - k->believed_time) / ramp, 0.0, 1.0) : 1.0;
     return before + f * (k->offset - before);
   };
@@ -112,7 +116,7 @@ std::string corrected_gcode(const reduce::LightModel& model, const std::vector<o
       // depth at its own feed, not to the nominal one with the correction as a jump after it.
       const double z = p.z() + (on_floor(0.5 * (from + t)) || on_floor(t) ? offset_at(t) : 0.0);
       const double length = std::hypot((p - prev).head<2>().norm(), z - last_z);
-      if (length > 1e-6 || std::abs(z - last_z) > 1e-6) {  // else its time goes to the next piece written
+      if (length > 1e-6 || std::abs(z - last_z) > 1e-6) {  // else its time goes to the segment's next piece
         // Off the floor, a straight retract and a move across at the path's top are rapids, as a
         // shop writes them (and as its controller times them): up to the clearance plane, across
         // there, and down to the path's top again before the plunge, which keeps its feed.

@@ -9,7 +9,6 @@
 // Stages 2-3 are kept under --out and reused while the case that made them is unchanged, so a rerun
 // with other sensor or control settings costs only the loop.
 #include "loop/closed_loop_run.hpp"
-#include "support/run_folder.hpp"
 #include "loop/replanned_finish.hpp"
 #include "machine/cl_data.hpp"
 #include "paths/copy/cloud_path.hpp"
@@ -79,12 +78,9 @@ nlohmann::json sync_json(const case_file::Case& c, const online::LoopSimulationS
 
 RunResult run_closed_loop(const case_file::Case& c, const RunOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  // Before any long work: the folder takes files, the [sync] machine reads; then the earlier run's
-  // outputs go (its stages, offline/ and truth/, stay: reused only for their own case).
-  check_output_folder(options.out);
-  check_sync_machine(c);
-  clear_earlier_run(options.out);
-  const ClosedLoopInputs in = prepare_closed_loop(c, options);
+  RunOptions as_run = options;
+  as_run.command = "run";  // the folder checked and the earlier run's outputs cleared, before the stages
+  const ClosedLoopInputs in = prepare_closed_loop(c, as_run);
 
   // The two loops share everything but the correction; each has its own copy of the truth.
   if (!options.quiet) std::cerr << "drom run: the closed loop, with and without correction (" << online::floor_passes(in.model).size() << " passes)\n";

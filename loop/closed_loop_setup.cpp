@@ -13,7 +13,9 @@
 #include "support/hdf5_reader.hpp"
 #include "support/input_error.hpp"
 #include "support/resources.hpp"
+#include "support/run_folder.hpp"
 #include "support/stop_request.hpp"
+#include "support/summary.hpp"
 
 #include <chrono>
 #include <exception>
@@ -102,6 +104,10 @@ void machining_stages(const case_file::Case& c, const RunOptions& options, Close
   const std::string offline_text = strip(offline_tables), truth_text = strip(kLoopTables);
   std::optional<Stage> offline_stage, truth_stage;
   const std::string plan = offline::on_root_then_broadcast(team, [&] {
+    // Before any long work, and before anything is removed: the folder takes files, the machine reads.
+    if (!options.command.empty()) check_output_folder(options.out);
+    check_sync_machine(c);
+    if (!options.command.empty()) clear_earlier_run(options.out, options.command);
     offline_stage = stage_to_run(offline_text, options.out / "offline", options);
     truth_stage = stage_to_run(truth_text, options.out / "truth", options);
     return std::string{offline_stage ? '1' : '0', truth_stage ? '1' : '0'};
@@ -286,20 +292,31 @@ LoopPair run_both_loops(const case_file::Case& c, const ClosedLoopInputs& in, do
   pair.corrected_truth = in.play(factor);
   const TruthPlay& a = pair.corrected_truth;
   const TruthPlay b = in.play(factor);
+  // Either loop's failure stops the other too, as an outside stop stops both.
+  std::stop_source both;
+  const std::stop_callback forward(stop, [&] { both.request_stop(); });
+  const std::stop_token token = both.get_token();
   std::exception_ptr side_failure;
   std::thread side([&] {
     try {
-      pair.uncorrected = uncorrected_loop.run(b.part, [&](double) { throw_if_stop_requested(stop); });
+      pair.uncorrected = uncorrected_loop.run(b.part, [&](double) { throw_if_stop_requested(token); });
     } catch (...) {
       side_failure = std::current_exception();
+      both.request_stop();
     }
   });
   try {
     pair.corrected = corrected_loop.run(a.part, [&](double f) {
-      throw_if_stop_requested(stop);
+      throw_if_stop_requested(token);
       if (progress) progress(f);
     });
+  } catch (const StopRequested&) {
+    side.join();
+    // Stopped by the side's own failure, not from outside: that failure is the news.
+    if (side_failure && !stop.stop_requested()) std::rethrow_exception(side_failure);
+    throw;
   } catch (...) {
+    both.request_stop();
     side.join();
     throw;
   }

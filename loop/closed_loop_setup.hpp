@@ -35,6 +35,10 @@ struct RunOptions {
   // (JobOptions::stop), the loop within a percent of its steps; then StopRequested is thrown
   // (support/stop_request.hpp), and a rerun resumes the stages from their checkpoints.
   std::stop_token stop;
+  // The command whose folder `out` is ("run", "study"): before the stages, on rank 0 and so within
+  // the team's first collective step, the folder is checked, the [sync] machine read, and the
+  // earlier run's outputs cleared (support/summary.hpp). Empty: the stages alone, nothing cleared.
+  std::string command;
 };
 
 // The truth run, as the closed loop plays it.

@@ -6,7 +6,6 @@
 // The stress amplitude scales the truth's displacements (they are linear in the stresses), so it
 // does not rerun the truth either.
 #include "loop/closed_loop_study.hpp"
-#include "support/run_folder.hpp"
 
 #include "loop/closed_loop_report.hpp"
 #include "support/summary.hpp"
@@ -60,10 +59,9 @@ nlohmann::json run_study(const case_file::Case& base, const std::string& paramet
   }
   if (values.empty()) throw InputError("--values: expected at least one value, e.g. --values 0,0.02,0.05");
   const Parameter& parameter = it->second;
-  check_output_folder(options.out);
-  check_sync_machine(base);
-  clear_earlier_run(options.out);
-  const ClosedLoopInputs in = prepare_closed_loop(base, options);
+  RunOptions as_study = options;
+  as_study.command = "study";  // the folder checked and the earlier study's outputs cleared, before the stages
+  const ClosedLoopInputs in = prepare_closed_loop(base, as_study);
 
   std::string csv = parameter_name +
                     ",learned_at_s,learned_pass,uncorrected_max_mm,corrected_max_from_pass3_mm,corrected_mean_from_pass3_mm,final_shape_error_target_pass_mm,"

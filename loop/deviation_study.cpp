@@ -322,7 +322,7 @@ nlohmann::json run_deviation_study(const DeviationCase& c, const std::filesystem
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   check_output_folder(out);
-  clear_earlier_run(out);
+  clear_earlier_run(out, "deviation");
 
   // 1. Family and basis.
   const reduce::DeviationFamily family = build_family(c);

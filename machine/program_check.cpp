@@ -268,6 +268,7 @@ nlohmann::json check_program(const ProgramCheckOptions& o) {
   nlohmann::json tv = nlohmann::json::array();
   for (const auto& v : travel) tv.push_back({{"block", v.pose}, {"axis", v.joint >= 0 ? axis_label(m, v.joint) : "orientation"}, {"what", v.what}});
   s["travel_violations"] = tv;
+  s["travel_violation_count"] = loaded.reader == "cl" ? travel.size() : verdict.beyond_stroke_count;
   nlohmann::json sp = nlohmann::json::array();
   for (const auto& q : verdict.singular_passages) sp.push_back({{"line", q.line}, {"distance_deg", q.distance * 180 / std::numbers::pi}});
   s["singularity_passages"] = sp;
@@ -279,8 +280,12 @@ nlohmann::json check_program(const ProgramCheckOptions& o) {
   s["host"] = machine_info();
   write_summary(out, s);
   folder.commit();  // a program beyond the strokes still gets its report, then the error
-  if (!travel.empty())
-    throw InputError(travel.front().what + (travel.size() > 1 ? " (and " + std::to_string(travel.size() - 1) + " more; summary.json lists them)" : std::string()));
+  if (!travel.empty()) {
+    const std::size_t all = loaded.reader == "cl" ? travel.size() : verdict.beyond_stroke_count;
+    throw InputError(travel.front().what + (all > 1 ? " (and " + std::to_string(all - 1) + " more; summary.json lists " +
+                                                          (all > travel.size() ? "the first " + std::to_string(travel.size()) : std::string("them")) + ")"
+                                                    : std::string()));
+  }
   return s;
 }
 

@@ -83,6 +83,7 @@ ProgramVerdict scan_program(const MachineProgram& program, const std::string& or
     for (int j = 0; j < m.joint_count(); ++j) {
       const double value = kin.stroke_value(j, b.end);
       if (m.axes[j].within(value, 1e-6)) continue;
+      if (v.beyond_stroke_count++ >= ProgramVerdict::kKeptExcesses) continue;  // counted; a program wholly off the table keeps its memory
       char buf[160];
       std::snprintf(buf, sizeof buf, " beyond its stroke [%g, %g] %s", joint_in_program_units(m, j, m.axes[j].min), joint_in_program_units(m, j, m.axes[j].max),
                     m.axes[j].rotary ? "deg" : "mm");
@@ -136,7 +137,7 @@ nlohmann::json ProgramVerdict::to_json() const {
   return {{"program", origin},
           {"runnable", runnable()},
           {"out_of_reach", first},
-          {"out_of_reach_blocks", beyond_strokes.size()},
+          {"out_of_reach_blocks", beyond_stroke_count},
           {"singularity_passages", singular_passages.size()},
           {"singularity_lines", lines},
           {"demand_at_programmed_feed", demand_json()},
@@ -149,7 +150,7 @@ nlohmann::json ProgramVerdict::to_json() const {
 std::string ProgramVerdict::summary_line() const {
   char buf[512];
   if (!runnable()) {
-    std::snprintf(buf, sizeof buf, "%zu blocks beyond the machine's strokes (first: %s): not written as a runnable program", beyond_strokes.size(),
+    std::snprintf(buf, sizeof buf, "%zu blocks beyond the machine's strokes (first: %s): not written as a runnable program", beyond_stroke_count,
                   beyond_strokes.front().what.c_str());
     return buf;
   }

@@ -42,13 +42,15 @@ struct SingularPassage {
 
 struct ProgramVerdict {
   std::string origin;
-  std::vector<StrokeExcess> beyond_strokes;      // every block end beyond a stroke, per axis
+  std::vector<StrokeExcess> beyond_strokes;      // block ends beyond a stroke, per axis: the first kKeptExcesses
+  std::size_t beyond_stroke_count = 0;           // all of them
+  static constexpr std::size_t kKeptExcesses = 1000;
   std::vector<SingularPassage> singular_passages;  // one per line
   AxisDemand velocity, acceleration, jerk;     // the worst over every axis and cutting block
   double cycle_time = 0, programmed_time = 0;  // s (judge_program, on a runnable program)
   double share_at_programmed_feed = 0;         // of the cutting length
 
-  bool runnable() const { return beyond_strokes.empty(); }
+  bool runnable() const { return beyond_stroke_count == 0; }
   bool slows_down() const { return velocity.ratio > 1 || acceleration.ratio > 1 || jerk.ratio > 1; }
   nlohmann::json to_json() const;
   // The demand ratios alone, as summary.json's "demand_at_programmed_feed".

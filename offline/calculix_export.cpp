@@ -17,7 +17,7 @@
 namespace drom::offline {
 
 CalculixExport export_calculix_station(const case_file::Case& c, JobKind kind, std::size_t station, const std::filesystem::path& out) {
-  clear_earlier_run(out);
+  clear_earlier_run(out, kind == JobKind::Truth ? "truth --export-ccx" : "offline --export-ccx");
   const PartModel part = build_part(c);
   if (part.mesh.type != fem::ElementType::Hex20)
     throw InputError(c.origin + ": --export-ccx: the case's mesh is made of " + fem::element_name(part.mesh.type) +

@@ -136,7 +136,7 @@ nlohmann::json plate_curvature_against_closed_form(const case_file::Case& c, con
 }  // namespace
 
 nlohmann::json run_layer_check(const case_file::Case& c, const std::filesystem::path& out, bool quiet) {
-  clear_earlier_run(out);
+  clear_earlier_run(out, "layer");
   Steps steps(6, quiet);
   steps.begin("meshing the part");
   const PartModel part = build_part(c);

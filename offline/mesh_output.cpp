@@ -7,7 +7,7 @@
 namespace drom::offline {
 
 nlohmann::json write_mesh(const case_file::Case& c, const std::filesystem::path& out) {
-  clear_earlier_run(out);
+  clear_earlier_run(out, "mesh");
   const PartModel part = build_part(c);
   const auto clamped = clamp_dofs(c, part);
   std::vector<double> clamp_flag(static_cast<std::size_t>(part.mesh.node_count()), 0.0);

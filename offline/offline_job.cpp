@@ -71,9 +71,7 @@ class Checkpoint {
     } else if (join == Join::Existing) {
       throw InputError(dir_.string() + ": no job's stations are here (run the slices with --stations a:b and the same --out first)");
     } else {
-      // A new job: the earlier one's database and summary go first (support/summary.hpp). Station
-      // files without a manifest are not known to be this run's (a removal cut short): gone.
-      clear_earlier_run(dir_.parent_path());
+      // Station files without a manifest are not known to be this run's (a removal cut short): gone.
       std::filesystem::remove_all(dir_);
       std::filesystem::create_directories(dir_);
       write_file_atomically(manifest, identity);
@@ -321,7 +319,11 @@ void open_checkpoints(const Pass& pass) {
                                 : pass.options.resume ? Checkpoint::Join::Resume
                                                       : Checkpoint::Join::Fresh;
   on_root_then_broadcast(pass.team, [&] {
-    for (const auto& o : pass.outputs) check_output_folder(o.options.out);
+    for (const auto& o : pass.outputs) {
+      check_output_folder(o.options.out);
+      // A new job: the earlier one's database and summary go first (support/summary.hpp).
+      if (join != Checkpoint::Join::Existing && !std::filesystem::exists(o.options.out / ".checkpoint" / "manifest.txt")) clear_earlier_run(o.options.out, o.mode);
+    }
     open(join);
     return std::string();
   });

@@ -137,7 +137,7 @@ nlohmann::json removal_summary(const case_file::Case& c, const MachiningRun& run
 }  // namespace
 
 nlohmann::json run_removal(const case_file::Case& c, const std::filesystem::path& out, bool quiet) {
-  clear_earlier_run(out);
+  clear_earlier_run(out, "removal");
   const auto start = std::chrono::steady_clock::now();
   const PartModel part = build_part(c);
   const auto& mesh = part.mesh;

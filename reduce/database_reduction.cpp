@@ -331,7 +331,7 @@ DatabaseReduction reduce_database(const std::filesystem::path& db_path, const Da
 
 nlohmann::json write_reduction(const std::filesystem::path& model_path, const DatabaseReduction& r, double seconds) {
   const std::filesystem::path out_dir = model_path.has_parent_path() ? model_path.parent_path() : std::filesystem::path(".");
-  clear_earlier_run(out_dir);
+  clear_earlier_run(out_dir, "reduce");
   std::filesystem::create_directories(out_dir);
   r.model.write(model_path);
   write_mode_pictures(out_dir, r);

@@ -63,7 +63,7 @@ void check_output_folder(const fs::path& out) {
   if (fs::exists(out, ec) && !fs::is_directory(out, ec)) throw InputError("--out " + shown + ": a file is there, not a folder");
   fs::create_directories(out, ec);
   if (ec) throw InputError("--out " + shown + ": cannot create the folder: " + ec.message());
-  const fs::path probe = out / (".drom_probe_" + std::to_string(::getpid()));
+  const fs::path probe = out / ".drom_probe";  // one name: a killed check's probe is the next one's
   {
     std::ofstream f(probe);
     f << "drom checks the folder takes files\n";

@@ -34,6 +34,9 @@ int run_command(const CommandOptions& options) {
   // A corrected program beyond a stroke is not written (exit 3, as drom finish, copy and orient).
   const int exit_code = r.program_verdict && !r.program_verdict->runnable() ? 3 : 0;
   if (exit_code != 0) std::fprintf(stderr, "drom run: corrected_program.nc on %s: %s\n", c.sync_machine.c_str(), r.program_verdict->summary_line().c_str());
+  else if (r.program_verdict && r.program_verdict->slows_down())
+    std::fprintf(stderr, "drom run: warning: corrected_program.nc asks %s for more than its limits at the programmed feed: %s\n", c.sync_machine.c_str(),
+                 r.program_verdict->summary_line().c_str());
   if (options.quiet) return exit_code;
   const loop::Headline& h = r.headline;
   std::printf("drom run: %s (%s scale), model r = %d, %zu passes, sensor noise %.3g mm\n", c.name.c_str(), c.run_scale.c_str(), r.model_rank,

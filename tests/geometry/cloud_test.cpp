@@ -13,7 +13,10 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -360,3 +363,205 @@ TEST(CloudVoxelMap, BarycentresAndPlaneNormalsOfItsVoxels) {
 }
 
 }  // namespace
+
+// ---- PCD (issue 45): an encoder of the test's own, apart from the reader ---------------------
+
+namespace {
+
+// liblzf's format, greedy, brute-force matches within a 1 KiB window: a compressor the reader's
+// decompressor shares nothing with.
+std::string lzf_compress(const std::string& in) {
+  std::string out, literal;
+  auto flush = [&] {
+    for (std::size_t k = 0; k < literal.size(); k += 32) {
+      const std::string run = literal.substr(k, 32);
+      out.push_back(static_cast<char>(run.size() - 1));
+      out += run;
+    }
+    literal.clear();
+  };
+  for (std::size_t i = 0; i < in.size();) {
+    std::size_t best = 0, best_back = 0;
+    for (std::size_t back = 1; back <= std::min<std::size_t>(i, 1024); ++back) {
+      std::size_t n = 0;
+      while (i + n < in.size() && n < 264 && in[i + n] == in[i + n - back]) ++n;
+      if (n > best) best = n, best_back = back;
+    }
+    if (best < 3) {
+      literal.push_back(in[i++]);
+      continue;
+    }
+    flush();
+    const std::size_t len = best - 2, off = best_back - 1;
+    if (len < 7) {
+      out.push_back(static_cast<char>((len << 5) | (off >> 8)));
+    } else {
+      out.push_back(static_cast<char>((7u << 5) | (off >> 8)));
+      out.push_back(static_cast<char>(len - 7));
+    }
+    out.push_back(static_cast<char>(off & 0xff));
+    i += best;
+  }
+  flush();
+  return out;
+}
+
+enum class Pcd { ascii, binary, compressed };
+
+// The cloud as PCD with an rgb field (U4) and a 3-value padding field between x, y, z and the
+// normals, as PCL's PointXYZRGBNormal lays them out; float64 coordinates so the points read back exact.
+std::string pcd_bytes(const PointCloud& c, Pcd mode, std::size_t width = 0) {
+  const bool n = c.has_normals();
+  std::string h = "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\n";
+  h += n ? "FIELDS x y z rgb _ normal_x normal_y normal_z\nSIZE 8 8 8 4 4 8 8 8\nTYPE F F F U F F F F\nCOUNT 1 1 1 1 3 1 1 1\n"
+         : "FIELDS x y z rgb\nSIZE 8 8 8 4\nTYPE F F F U\nCOUNT 1 1 1 1\n";
+  const std::size_t w = width ? width : c.size();
+  h += "WIDTH " + std::to_string(w) + "\nHEIGHT " + std::to_string(c.size() / w) + "\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(c.size()) + "\n";
+  h += std::string("DATA ") + (mode == Pcd::ascii ? "ascii" : mode == Pcd::binary ? "binary" : "binary_compressed") + "\n";
+  // Each field's bytes per point, in order.
+  auto fields_of = [&](std::size_t i) {
+    std::vector<std::string> f;
+    auto put = [&](auto v) { f.emplace_back(reinterpret_cast<const char*>(&v), sizeof v); };
+    put(c.points[i].x()), put(c.points[i].y()), put(c.points[i].z()), put(static_cast<std::uint32_t>(0x00ff8000u + i));
+    if (n) {
+      f.emplace_back(12, '\0');
+      put(c.normals[i].x()), put(c.normals[i].y()), put(c.normals[i].z());
+    }
+    return f;
+  };
+  if (mode == Pcd::ascii) {
+    char buf[128];
+    for (std::size_t i = 0; i < c.size(); ++i) {
+      std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g %u", c.points[i].x(), c.points[i].y(), c.points[i].z(), 0x00ff8000u + static_cast<unsigned>(i));
+      h += buf;
+      if (n) std::snprintf(buf, sizeof buf, " 0 0 0 %.17g %.17g %.17g", c.normals[i].x(), c.normals[i].y(), c.normals[i].z()), h += buf;
+      h += "\n";
+    }
+    return h;
+  }
+  if (mode == Pcd::binary) {
+    for (std::size_t i = 0; i < c.size(); ++i)
+      for (const auto& f : fields_of(i)) h += f;
+    return h;
+  }
+  std::string by_field;
+  const std::size_t nf = fields_of(0).size();
+  for (std::size_t k = 0; k < nf; ++k)
+    for (std::size_t i = 0; i < c.size(); ++i) by_field += fields_of(i)[k];
+  const std::string z = lzf_compress(by_field);
+  const auto sizes = std::array<std::uint32_t, 2>{static_cast<std::uint32_t>(z.size()), static_cast<std::uint32_t>(by_field.size())};
+  h.append(reinterpret_cast<const char*>(sizes.data()), 8);
+  return h + z;
+}
+
+}  // namespace
+
+TEST(CloudReader, PcdReadsTheSamePointsAsThePlyOfTheSameCloud) {
+  for (const bool normals : {true, false}) {
+    PointCloud c = random_cloud(240, 11, normals);
+    for (std::size_t i = 0; i < 60; ++i) c.points[i + 60] = c.points[i];  // repeats: the compressor's back-references
+    const PointCloud ply = parse_ply(ply_bytes(c, {}, true), "same.ply");
+    for (const Pcd mode : {Pcd::ascii, Pcd::binary, Pcd::compressed}) {
+      const std::string bytes = pcd_bytes(c, mode, 24);  // organised: 24 x 10
+      const PointCloud pcd = parse_cloud(bytes, "same.pcd");
+      ASSERT_EQ(pcd.size(), ply.size()) << static_cast<int>(mode);
+      ASSERT_EQ(pcd.has_normals(), normals);
+      for (std::size_t i = 0; i < ply.size(); ++i) {
+        EXPECT_EQ(pcd.points[i], ply.points[i]) << i;
+        if (normals) { EXPECT_NEAR((pcd.normals[i] - ply.normals[i]).norm(), 0, 1e-15); }
+      }
+    }
+  }
+  // The compressor used back-references on the repeated points (so the reader's were exercised).
+  PointCloud c = random_cloud(240, 11, false);
+  for (std::size_t i = 0; i < 60; ++i) c.points[i + 60] = c.points[i];
+  EXPECT_LT(pcd_bytes(c, Pcd::compressed).size() + 1000, pcd_bytes(c, Pcd::binary).size());
+}
+
+TEST(CloudReader, PcdNoReturnPointsAreDroppedAndCountedAndCountsMustMatch) {
+  PointCloud c = random_cloud(30, 12, true);
+  c.points[4].z() = std::numeric_limits<double>::quiet_NaN();  // an organised cloud's "no return"
+  c.points[9] = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  for (const Pcd mode : {Pcd::ascii, Pcd::binary, Pcd::compressed}) {
+    const PointCloud back = parse_pcd(pcd_bytes(c, mode, 10), "organised.pcd");
+    ASSERT_EQ(back.size(), 28u);
+    EXPECT_EQ(back.dropped.not_finite, 2u);
+    EXPECT_EQ(back.points[4], c.points[5]);
+    EXPECT_NE(back.dropped.first_not_finite.find("point 4 has a coordinate that is not a finite number"), std::string::npos) << back.dropped.first_not_finite;
+    EXPECT_ERROR(parse_pcd(pcd_bytes(c, mode, 10), "organised.pcd", {.not_finite_is_error = true}), "point 4 has a coordinate");
+  }
+  const PointCloud clean = random_cloud(30, 13, false);
+  for (const Pcd mode : {Pcd::ascii, Pcd::binary, Pcd::compressed}) {
+    const std::string bytes = pcd_bytes(clean, mode);
+    std::string fewer = bytes, more = bytes;
+    for (std::string* s : {&fewer, &more})
+      for (const char* key : {"WIDTH 30", "POINTS 30"}) s->replace(s->find(key), std::strlen(key), std::string(key).replace(std::strlen(key) - 2, 2, s == &fewer ? "29" : "31"));
+    const std::string short_count = error_of([&] { parse_pcd(fewer, "fewer.pcd"); });
+    const std::string long_count = error_of([&] { parse_pcd(more, "more.pcd"); });
+    EXPECT_NE(short_count.find("fewer.pcd: "), std::string::npos) << short_count;
+    EXPECT_NE(long_count.find("more.pcd: "), std::string::npos) << long_count;
+    if (mode == Pcd::ascii) {
+      EXPECT_NE(short_count.find("a point beyond the 29 the header declares (line 10)"), std::string::npos) << short_count;
+      EXPECT_NE(long_count.find("the file holds 30 points, the header (line 10) 31"), std::string::npos) << long_count;
+    } else if (mode == Pcd::binary) {
+      EXPECT_NE(short_count.find("bytes after the 29 points the header declares"), std::string::npos) << short_count;
+      EXPECT_NE(long_count.find("the data ends before the 31 points"), std::string::npos) << long_count;
+    } else {
+      EXPECT_NE(short_count.find("is not the 29 points of 28 bytes"), std::string::npos) << short_count;
+      EXPECT_NE(long_count.find("is not the 31 points of 28 bytes"), std::string::npos) << long_count;
+    }
+  }
+}
+
+TEST(CloudReader, PcdMalformedHeadersAndDataAreRefusedNamingWhere) {
+  const std::string head = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n";
+  EXPECT_EQ(parse_cloud(head + "1 2 3\n4 5 6\n", "ok.pcd").size(), 2u);
+  auto edited = [&](const std::string& from, const std::string& to) {
+    std::string s = head;
+    s.replace(s.find(from), from.size(), to);
+    return s + "1 2 3\n4 5 6\n";
+  };
+  EXPECT_ERROR(parse_pcd(edited("FIELDS x y z", "FIELDS x y w"), "f.pcd"), "f.pcd: line 2: FIELDS must name x, y and z");
+  EXPECT_ERROR(parse_pcd(edited("SIZE 4 4 4", "SIZE 4 4"), "f.pcd"), "line 2: FIELDS names 3 fields, SIZE 2, TYPE 3");
+  EXPECT_ERROR(parse_pcd(edited("TYPE F F F", "TYPE F F Q"), "f.pcd"), "field z: TYPE must be I, U or F");
+  EXPECT_ERROR(parse_pcd(edited("SIZE 4 4 4", "SIZE 4 4 2"), "f.pcd"), "field z: a float (F) has SIZE 4 or 8");
+  EXPECT_ERROR(parse_pcd(edited("WIDTH 2", "WIDTH 3"), "f.pcd"), "line 9: POINTS 2 is not WIDTH x HEIGHT = 3");
+  EXPECT_ERROR(parse_pcd(edited("DATA ascii", "DATA zipped"), "f.pcd"), "line 9: DATA: expected ascii, binary or binary_compressed");
+  EXPECT_ERROR(parse_pcd(edited("HEIGHT 1", "COLOUR 1"), "f.pcd"), "line 7: expected a PCD header line");
+  EXPECT_ERROR(parse_pcd(head.substr(0, head.find("DATA")), "f.pcd"), "the header ends before its DATA line");
+  EXPECT_ERROR(parse_pcd(head + "1 2 3\n4 five 6\n", "f.pcd"), "f.pcd: line 11: 'five' is not a number");
+  EXPECT_ERROR(parse_pcd(head + "1 2 3\n4 5\n", "f.pcd"), "line 11: expected 3 values");
+  // Compressed data that lies: a back-reference before the start, a literal run past the end.
+  const std::string chead = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nPOINTS 1\nDATA binary_compressed\n";
+  auto compressed = [&](const std::string& z) {
+    const std::array<std::uint32_t, 2> sizes{static_cast<std::uint32_t>(z.size()), 12u};
+    return chead + std::string(reinterpret_cast<const char*>(sizes.data()), 8) + z;
+  };
+  EXPECT_ERROR(parse_pcd(compressed(std::string("\x01\x00\x00\x40\x05", 5)), "z.pcd"), "z.pcd: byte ");
+  EXPECT_ERROR(parse_pcd(compressed(std::string("\x01\x00\x00\x40\x05", 5)), "z.pcd"), "a back-reference before the start of the data");
+  EXPECT_ERROR(parse_pcd(compressed(std::string("\x1f\x00\x00", 3)), "z.pcd"), "the compressed data ends inside a literal run");
+  EXPECT_ERROR(parse_pcd(compressed(std::string("\x03\x00\x00\x80\x3f", 5)), "z.pcd"), "the compressed data gives 4 bytes, the header 12");
+  // "ABCD" then a back-reference of 4 bytes 4 back, then 4 more literal: x = y, z its own.
+  const float one = 1.0f, two = 2.0f;
+  std::string z(1, '\x03');
+  z.append(reinterpret_cast<const char*>(&one), 4).append("\x40\x03", 2).push_back('\x03');
+  z.append(reinterpret_cast<const char*>(&two), 4);
+  const PointCloud p = parse_pcd(compressed(z), "z.pcd");
+  ASSERT_EQ(p.size(), 1u);
+  EXPECT_EQ(p.points[0], Eigen::Vector3d(1, 1, 2));
+}
+
+TEST(CloudReader, PcdTruncationsNeverCrash) {
+  for (const Pcd mode : {Pcd::binary, Pcd::compressed}) {
+    const std::string full = pcd_bytes(random_cloud(20, 14, true), mode);
+    int errors = 0;
+    for (std::size_t n = 0; n < full.size(); ++n) {
+      try {
+        parse_cloud(std::string_view(full).substr(0, n), "prefix.pcd");
+      } catch (const drom::InputError&) {
+        ++errors;
+      }
+    }
+    EXPECT_EQ(errors, static_cast<int>(full.size()));
+  }
+}

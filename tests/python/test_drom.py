@@ -215,11 +215,16 @@ def test_a_model_of_another_format_version_or_truncated_is_refused(coarse_job):
 
 @pytest.mark.heavy
 def test_a_study_sweeps_a_loop_parameter(coarse_loop):
-    case, out, _ = coarse_loop
+    case, run_folder, _ = coarse_loop
+    out = fresh("study")
     study = drom.run_study(case, "noise", [0.0, 0.05], str(out))
     assert [row["value"] for row in study["rows"]] == [0.0, 0.05]
     with pytest.raises(drom.InputError, match="--param: expected one of"):
         drom.run_study(case, "colour", [1.0], str(out))
+    # A folder holds one command's outputs: a study into the run's folder is refused, the run's kept.
+    with pytest.raises(drom.InputError, match="it holds the outputs of drom run"):
+        drom.run_study(case, "noise", [0.0], str(run_folder))
+    assert (run_folder / "passes.csv").exists() and (run_folder / "summary.json").exists()
 
 
 @pytest.mark.heavy

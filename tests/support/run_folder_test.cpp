@@ -127,27 +127,39 @@ TEST(RunFolder, AFileInTheWayOrAnotherWriterIsAnErrorAtTheStart) {
 }
 
 // The distortion chain's commands write straight into their folder: a new run clears the earlier
-// run's summary.json first, then the files it lists, and nothing else.
+// run's summary.json first, then the files it lists, and nothing else; another command's folder, or
+// one whose summary.json drom did not write, is refused before anything is removed.
 TEST(EarlierRun, ItsSummaryGoesFirstThenTheFilesItListsAndNothingElse) {
   const fs::path out = scratch() / "chain";
-  put(out / "summary.json", R"({"command": "run", "files": ["passes.csv", "frames", "../outside.txt", "/etc/hostname", "summary.json"]})");
+  put(out / "summary.json", R"({"command": "run", "files": ["passes.csv", "frames/", "../outside.txt", "/etc/hostname", ".", "a/..", "linked/", "summary.json"]})");
   put(out / "passes.csv", "old\n");
   put(out / "frames" / "station_00001.vtu", "old\n");
   put(out / "offline" / "database.h5", "a cache under its own key\n");
   put(out / "notes.txt", "the user's\n");
   put(scratch() / "outside.txt", "not the run's folder\n");
-  drom::clear_earlier_run(out);
+  put(scratch() / "elsewhere" / "keep.txt", "behind a link\n");
+  fs::create_directory_symlink(scratch() / "elsewhere", out / "linked");
+  drom::clear_earlier_run(out, "run");
   EXPECT_FALSE(fs::exists(out / "summary.json"));
   EXPECT_FALSE(fs::exists(out / "passes.csv"));
   EXPECT_FALSE(fs::exists(out / "frames"));
-  EXPECT_TRUE(fs::exists(out / "offline" / "database.h5"));
+  EXPECT_FALSE(fs::exists(fs::symlink_status(out / "linked")));             // the link goes,
+  EXPECT_TRUE(fs::exists(scratch() / "elsewhere" / "keep.txt"));            // not what it points to
+  EXPECT_TRUE(fs::exists(out / "offline" / "database.h5"));                 // "." and "a/.." cleared nothing
   EXPECT_TRUE(fs::exists(out / "notes.txt"));
   EXPECT_TRUE(fs::exists(scratch() / "outside.txt"));
-  // A summary.json drom did not write (no "command") is not drom's to clear.
+  // Another command's folder, or a summary.json drom did not write: refused, nothing removed.
+  put(out / "summary.json", R"({"command": "offline", "files": ["notes.txt"]})");
+  try {
+    drom::clear_earlier_run(out, "reduce");
+    ADD_FAILURE() << "another command's folder cleared";
+  } catch (const drom::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--out " + out.string() + ": it holds the outputs of drom offline"), std::string::npos) << e.what();
+  }
   put(out / "summary.json", R"({"files": ["notes.txt"]})");
-  drom::clear_earlier_run(out);
+  EXPECT_THROW(drom::clear_earlier_run(out, "run"), drom::InputError);
   EXPECT_TRUE(fs::exists(out / "summary.json"));
   EXPECT_TRUE(fs::exists(out / "notes.txt"));
-  drom::clear_earlier_run(scratch() / "nothing_here");  // no folder: nothing to do
+  drom::clear_earlier_run(scratch() / "nothing_here", "run");  // no folder: nothing to do
   fs::remove_all(scratch());
 }
