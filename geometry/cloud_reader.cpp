@@ -105,6 +105,21 @@ void drop_not_finite(PointCloud& cloud, const CloudReadOptions& options, const s
   if (cloud.dropped.not_finite++ == 0) cloud.dropped.first_not_finite = origin + (binary ? ": byte " : ": line ") + std::to_string(where) + ": " + what;
 }
 
+// One point read: kept (its normal made a unit vector when the file has normals), or dropped and
+// counted when a coordinate or a normal component is not finite. `name` says which ("vertex 7").
+void add_point(PointCloud& cloud, const CloudReadOptions& options, const std::string& origin, std::size_t where, bool binary, const std::string& name,
+               const Eigen::Vector3d& p, const Eigen::Vector3d* n) {
+  if (!p.allFinite() || (n && !n->allFinite())) {
+    drop_not_finite(cloud, options, origin, where, binary, name + (p.allFinite() ? " has a normal" : " has a coordinate") + " that is not a finite number");
+    return;
+  }
+  cloud.points.push_back(p);
+  if (n) {
+    cloud.normals.emplace_back();
+    check_unit_normal(origin, where, binary, *n, cloud.normals.back());
+  }
+}
+
 void require_points(const PointCloud& cloud, const std::string& origin) {
   if (cloud.points.empty()) throw InputError(origin + ": the cloud has no point");
 }
@@ -445,15 +460,7 @@ PointCloud parse_ply(std::string_view bytes, const std::string& origin, const Cl
         const Eigen::Vector3d p(values[static_cast<std::size_t>(px)], values[static_cast<std::size_t>(py)], values[static_cast<std::size_t>(pz)]);
         const Eigen::Vector3d n = with_normals ? Eigen::Vector3d(values[static_cast<std::size_t>(pnx)], values[static_cast<std::size_t>(pny)], values[static_cast<std::size_t>(pnz)])
                                                : Eigen::Vector3d::Zero();
-        if (!p.allFinite() || !n.allFinite()) {
-          drop_not_finite(cloud, options, origin, line_number, false, "vertex " + std::to_string(i) + (p.allFinite() ? " has a normal" : " has a coordinate") + " that is not a finite number");
-          continue;
-        }
-        cloud.points.push_back(p);
-        if (with_normals) {
-          cloud.normals.emplace_back();
-          check_unit_normal(origin, line_number, false, n, cloud.normals.back());
-        }
+        add_point(cloud, options, origin, line_number, false, "vertex " + std::to_string(i), p, with_normals ? &n : nullptr);
       }
     }
     // Every element read: what follows is data the header does not declare (its vertex count is short).
@@ -504,15 +511,7 @@ PointCloud parse_ply(std::string_view bytes, const std::string& origin, const Cl
         const auto value = [&](int k) { return read_binary(bytes.data() + offsets[static_cast<std::size_t>(k)], element.properties[static_cast<std::size_t>(k)].type, big); };
         const Eigen::Vector3d p(value(px), value(py), value(pz));
         const Eigen::Vector3d n = with_normals ? Eigen::Vector3d(value(pnx), value(pny), value(pnz)) : Eigen::Vector3d::Zero();
-        if (!p.allFinite() || !n.allFinite()) {
-          drop_not_finite(cloud, options, origin, record, true, "vertex " + std::to_string(i) + (p.allFinite() ? " has a normal" : " has a coordinate") + " that is not a finite number");
-          continue;
-        }
-        cloud.points.push_back(p);
-        if (with_normals) {
-          cloud.normals.emplace_back();
-          check_unit_normal(origin, record, true, n, cloud.normals.back());
-        }
+        add_point(cloud, options, origin, record, true, "vertex " + std::to_string(i), p, with_normals ? &n : nullptr);
       }
     }
     // A newline after the data is common; anything more is data the header does not declare.
@@ -675,15 +674,7 @@ PointCloud parse_pcd(std::string_view bytes, const std::string& origin, const Cl
   if (normal_fields != 0 && normal_fields != 3) fail_at_line(origin, fields_line, "FIELDS names some of normal_x, normal_y, normal_z: all three or none");
   const bool with_normals = normal_fields == 3;
   auto add = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& n, std::size_t where, bool binary, std::uint64_t i) {
-    if (!p.allFinite() || !n.allFinite()) {
-      drop_not_finite(cloud, options, origin, where, binary, "point " + std::to_string(i) + (p.allFinite() ? " has a normal" : " has a coordinate") + " that is not a finite number");
-      return;
-    }
-    cloud.points.push_back(p);
-    if (with_normals) {
-      cloud.normals.emplace_back();
-      check_unit_normal(origin, where, binary, n, cloud.normals.back());
-    }
+    add_point(cloud, options, origin, where, binary, "point " + std::to_string(i), p, with_normals ? &n : nullptr);
   };
   if (data == "ascii") {
     std::uint64_t read = 0;
