@@ -50,6 +50,13 @@ fs::path hidden_sibling(const fs::path& out, const char* suffix) {
 fs::path discarded_folder(const fs::path& out) { return hidden_sibling(out, ".discarded"); }
 fs::path ready_folder(const fs::path& out) { return hidden_sibling(out, ".ready"); }
 
+// A folder that refuses a file: bad input (exit 2, naming --out), but for a full disk, which is a
+// failure of the run (exit 1), to run again once there is room.
+[[noreturn]] void cannot_write(const std::string& what, int error) {
+  if (error == ENOSPC || error == EDQUOT) throw std::runtime_error(what + ": " + std::strerror(error));
+  throw InputError(what + ": " + std::strerror(error));
+}
+
 void remove_quietly(const fs::path& p) {
   std::error_code ec;
   fs::remove_all(p, ec);
@@ -69,9 +76,9 @@ void check_output_folder(const fs::path& out) {
     f << "drom checks the folder takes files\n";
     f.flush();
     if (!f) {
-      const std::string reason = std::strerror(errno);
+      const int error = errno;
       fs::remove(probe, ec);
-      throw InputError("--out " + shown + ": cannot write in it: " + reason);
+      cannot_write("--out " + shown + ": cannot write in it", error);
     }
   }
   fs::remove(probe, ec);
@@ -143,7 +150,7 @@ RunFolder::RunFolder(fs::path out, const RunFolderOptions& options) : out_(norma
     std::ofstream f(staging_ / kMarker);
     f << "a folder written by drom: a run replaces it whole (support/run_folder.hpp)\n";
     f.flush();
-    if (!f) throw InputError("--out " + shown + ": cannot write in " + staging_.string() + ": " + std::strerror(errno));
+    if (!f) cannot_write("--out " + shown + ": cannot write in " + staging_.string(), errno);
   }
 }
 

@@ -50,7 +50,8 @@ class RunFolder {
 
 // For the commands that write straight into their folder (support/summary.hpp, clear_earlier_run):
 // makes `out` and checks, before any long work, that it is a folder and takes files. InputError
-// naming --out otherwise (a file in the way, a read-only or full file system).
+// naming --out otherwise (a file in the way, a read-only file system); a full disk is a
+// std::runtime_error (the run fails, exit 1, and can run again once there is room).
 void check_output_folder(const std::filesystem::path& out);
 
 // The staging folder of `out`: `<out>.partial`.
