@@ -663,6 +663,7 @@ PointCloud parse_pcd(std::string_view bytes, const std::string& origin, const Cl
     if (f.count == 0 || f.count > 100000) fail_at_line(origin, fields_line, "field " + f.name + ": COUNT must be 1 to 100000");
     f.offset = data == "ascii" ? values_per_point : stride;
     stride += f.size * f.count, values_per_point += f.count;
+    if (values_per_point > 1000000) fail_at_line(origin, fields_line, "the fields hold over 10^6 values per point");
     int* slot = f.name == "x" ? &ix : f.name == "y" ? &iy : f.name == "z" ? &iz : f.name == "normal_x" ? &inx : f.name == "normal_y" ? &iny : f.name == "normal_z" ? &inz : nullptr;
     if (!slot) continue;
     if (*slot >= 0) fail_at_line(origin, fields_line, "field " + f.name + " is named twice");
@@ -729,6 +730,10 @@ PointCloud parse_pcd(std::string_view bytes, const std::string& origin, const Cl
     if (bytes.size() - position - 8 < compressed) fail_at_byte(origin, position, "the compressed data (" + std::to_string(compressed) + " bytes) runs past the end of the file");
     if (bytes.size() - position - 8 > compressed)
       fail_at_byte(origin, position + 8 + compressed, std::to_string(bytes.size() - position - 8 - compressed) + " bytes after the compressed data");
+    // LZF gives at most 264 bytes for a 2-byte back-reference: a larger claim is a lie, and it is
+    // found before the memory is taken for it.
+    if (static_cast<double>(uncompressed) > 132.0 * static_cast<double>(compressed) + 32)
+      fail_at_byte(origin, position + 4, "the uncompressed size " + std::to_string(uncompressed) + " cannot come from " + std::to_string(compressed) + " compressed bytes");
     decompressed = total == 0 ? std::string() : lzf_decompress(bytes.substr(position + 8, compressed), total, origin, position + 8);
     body = decompressed;
   }

@@ -541,6 +541,12 @@ TEST(CloudReader, PcdMalformedHeadersAndDataAreRefusedNamingWhere) {
   EXPECT_ERROR(parse_pcd(compressed(std::string("\x01\x00\x00\x40\x05", 5)), "z.pcd"), "a back-reference before the start of the data");
   EXPECT_ERROR(parse_pcd(compressed(std::string("\x1f\x00\x00", 3)), "z.pcd"), "the compressed data ends inside a literal run");
   EXPECT_ERROR(parse_pcd(compressed(std::string("\x03\x00\x00\x80\x3f", 5)), "z.pcd"), "the compressed data gives 4 bytes, the header 12");
+  // A million points claimed from five compressed bytes: refused before 12 MB are taken for them.
+  const std::array<std::uint32_t, 2> lie{5u, 12000000u};
+  EXPECT_ERROR(parse_pcd("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nPOINTS 1000000\nDATA binary_compressed\n" + std::string(reinterpret_cast<const char*>(lie.data()), 8) +
+                             std::string("\x01\x00\x00\x40\x05", 5),
+                         "z.pcd"),
+               "the uncompressed size 12000000 cannot come from 5 compressed bytes");
   // "ABCD" then a back-reference of 4 bytes 4 back, then 4 more literal: x = y, z its own.
   const float one = 1.0f, two = 2.0f;
   std::string z(1, '\x03');
