@@ -114,7 +114,8 @@ std::string corrected_gcode(const reduce::LightModel& model, const std::vector<o
       const Eigen::Vector3d p = a + f * (b - a);
       // On the floor, and at the end of the plunge onto it: the plunge goes down to the corrected
       // depth at its own feed, not to the nominal one with the correction as a jump after it.
-      const double z = p.z() + (on_floor(0.5 * (from + t)) || on_floor(t) ? offset_at(t) : 0.0);
+      const bool floor_piece = on_floor(0.5 * (from + t)) || on_floor(t);
+      const double z = p.z() + (floor_piece ? offset_at(t) : 0.0);
       const double length = std::hypot((p - prev).head<2>().norm(), z - last_z);
       if (length > 1e-6 || std::abs(z - last_z) > 1e-6) {  // else its time goes to the segment's next piece
         // Off the floor, a straight retract and a move across at the path's top are rapids, as a
@@ -122,7 +123,7 @@ std::string corrected_gcode(const reduce::LightModel& model, const std::vector<o
         // there, and down to the path's top again before the plunge, which keeps its feed.
         const bool retract = (p - prev).head<2>().norm() < 1e-9 && z > last_z;
         const bool across = z >= top - 1e-9 && last_z >= top - 1e-9;
-        if (!on_floor(0.5 * (from + t)) && !on_floor(t) && (retract || across)) {
+        if (!floor_piece && (retract || across)) {
           if (tool_z < plane) std::snprintf(line, sizeof line, "G0 Z%.4f\n", plane), g += line, tool_z = plane;
           if ((p - prev).head<2>().norm() >= 1e-9) std::snprintf(line, sizeof line, "G0 X%.4f Y%.4f\n", p.x(), p.y()), g += line;
         } else {
