@@ -379,8 +379,11 @@ JointPath inverse_path(const Kinematics& kin, std::span<const ClPose> poses, con
       path.branch[i] = c.branch;
       follow(i + 1, sp.c[static_cast<std::size_t>(c.branch)]);
       solve(i + 1);
-    } else if (sp.singular && i + 1 < n) {
-      // Past the singularity the branch whose c continues from the free angle's pose is the continuous one.
+    } else if (sp.singular && i + 1 < n && (status[i + 1] & kStatusMask) != kSingular) {
+      // Past the singularity the branch whose c continues from the free angle's pose is the continuous
+      // one. Within a run of singular poses (a 3+2 program along C's axis) nothing is followed: each is
+      // solved here from the one before, and following and solving the rest of the path again at every
+      // one of them made a vertical packet's program quadratic in its length.
       follow(i + 1, kin.split(kin.forward(c.joints)).c[0]);
       solve(i + 1);
     }

@@ -23,7 +23,7 @@ int copy_command(const CommandOptions& options) {
   std::string refused;
   for (const auto& p : s["packets"])
     for (const char* op : {"roughing", "finishing"})
-      if (refused.empty() && p.contains(op) && p[op].contains("post_processor_error")) refused = p[op]["post_processor_error"].get<std::string>();
+      if (refused.empty() && p.contains(op) && p[op].contains("refused")) refused = p[op]["refused"].get<std::string>();
   if (!refused.empty()) std::fprintf(stderr, "drom copy: no runnable program for a packet: %s; the rest is in %s\n", refused.c_str(), o.out.string().c_str());
   const int code = refused.empty() ? 0 : 3;
   if (o.quiet) return code;

@@ -50,6 +50,13 @@ struct CloudFinishingSettings {
   // A link between two cuts longer than this is a retract, shorter ones are fed straight when the
   // tool stays at or above its dropped height all along (mm; 0: 5 level-ground steps, at least 2 mm).
   double longest_link = 0;
+  // The bins' points from this index on are not the scan (the part's side below its rim, the stock's
+  // base, fixtures): a node whose cutter rests on one of them finishes nothing and is a gap, so the
+  // tool never follows the assumed side down. -1: every point is the scan.
+  int scan_points = -1;
+  // The scan's noise (standard deviation, mm; geometry/cloud_noise.hpp): a move may stay above the
+  // dropped height by Tu + 3 noise (stock the noise hides), never below it by more than Tu.
+  double noise = 0;
 };
 
 struct CloudFinishing {
@@ -57,10 +64,10 @@ struct CloudFinishing {
   int passes = 0;
   long long nodes = 0;                  // grid nodes inside the area
   long long inserted = 0;               // nodes the chord test added
-  long long unresolved = 0;             // shortest moves still straying more than Tu (noise finer than the tolerance)
+  long long unresolved = 0;             // shortest moves still dipping more than Tu below the dropped height: taken round the corner
   double unresolved_worst = 0;          // by how much at most, mm
   long long stepped = 0;                // of the moves, those taken round the corner (up, across, down) at a step no chord resolves
-  long long gaps = 0;                   // inside nodes with no point under the cutter
+  long long gaps = 0;                   // inside nodes with no scanned point under the cutter (nothing, or the side, base or a fixture)
   long long lifted = 0;                 // nodes where the shank or the holder, not the cutter, set the height
   long long below_bound = 0;            // contacts where even the smallest step exceeds the scallop bound
   long long steeper = 0;                // contacts steeper than `steepest`, which did not set the step

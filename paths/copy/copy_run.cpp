@@ -40,8 +40,12 @@ void write_path_vtp(const std::filesystem::path& file, const CloudPath& path, co
   write_polylines_vtp(file, p);
 }
 
-nlohmann::json check_json(const PathCheck& c) {
-  return {{"positions", c.positions}, {"deepest_mm", c.deepest}, {"worst_tip_drop_frame", vec(c.worst)}, {"positions_over_tolerance", c.over}};
+nlohmann::json check_json(const PathCheck& c, const Eigen::Matrix3d& frame) {
+  return {{"positions", c.positions},
+          {"deepest_mm", c.deepest},
+          {"worst_tip_drop_frame", vec(c.worst)},
+          {"worst_tip_part_frame", vec(frame.transpose() * c.worst)},
+          {"positions_over_tolerance", c.over}};
 }
 
 // The rows: points with a normal, their packet, how many directions see them, overlap (PLY and VTP).
@@ -60,6 +64,15 @@ void write_point_files(const std::filesystem::path& out, const geometry::PointCl
   }
   geometry::write_ply(out / "normals.ply", rows, {{"packet", packet, true}, {"directions_seeing", seen, true}, {"overlap", overlap, true}, {"hits", hits, true}});
   files.push_back("normals.ply");
+  // What drom assumed beyond the scan: the points that completed it, and the part's side below its rim.
+  for (const auto& [name, points] : {std::pair{"completion.ply", &r.completion}, std::pair{"rim.ply", &r.rim.points}, std::pair{"side.ply", &r.side}}) {
+    if (points->empty()) continue;
+    geometry::PointCloud c;
+    c.origin = cloud.origin;
+    c.points = *points;
+    geometry::write_ply(out / name, c);
+    files.push_back(name);
+  }
   Eigen::Matrix3Xd points(3, n);
   Eigen::VectorXd normals(3 * n);
   for (int i = 0; i < n; ++i) points.col(i) = rows.points[static_cast<std::size_t>(i)], normals.segment<3>(3 * i) = rows.normals[static_cast<std::size_t>(i)];
@@ -78,7 +91,7 @@ nlohmann::json write_operation(const std::filesystem::path& out, const std::stri
                       {"cutting_length_mm", op.path.cutting_length()},
                       {"rapid_length_mm", op.path.rapid_length()},
                       {"cycle_time_s", op.cycle_time},
-                      {"check", check_json(op.check)}};
+                      {"check", check_json(op.check, frame)}};
   if (!op.path.empty()) {
     write_path_vtp(out / dir / (name + ".vtp"), op.path, frame);
     write_file_atomically(out / dir / (name + "_cl.csv"), machine::cl_csv(op.cl));
@@ -89,7 +102,7 @@ nlohmann::json write_operation(const std::filesystem::path& out, const std::stri
     files.push_back(dir + "/" + name + ".ngc");
   }
   if (op.verdict) e["program_verdict"] = op.verdict->to_json();
-  if (!op.error.empty()) e["post_processor_error"] = op.error;
+  if (!op.error.empty()) e["refused"] = op.error;  // no program written: why
   return e;
 }
 
@@ -97,7 +110,11 @@ nlohmann::json write_operation(const std::filesystem::path& out, const std::stri
 nlohmann::json write_packet(const std::filesystem::path& out, std::size_t k, const PacketPlan& p, int points, std::vector<std::string>& files) {
   const std::string dir = "packet_" + std::to_string(k + 1);
   std::filesystem::create_directories(out / dir);
-  nlohmann::json j = {{"direction", p.direction}, {"axis", vec(p.axis)}, {"rotary_deg", {p.rotary.x(), p.rotary.y()}}, {"points", points}};
+  nlohmann::json j = {{"direction", p.direction},
+                      {"axis", vec(p.axis)},
+                      {"tilt_deg", tilt_from_z(p.axis)},
+                      {"rotary_deg", {p.rotary.x(), p.rotary.y()}},
+                      {"points", points}};
   if (!p.error.empty()) j["error"] = p.error;
   if (p.finishing) {
     const CloudFinishing& f = *p.finishing;
@@ -109,7 +126,13 @@ nlohmann::json write_packet(const std::filesystem::path& out, std::size_t k, con
                            {"unresolved_worst_mm", f.unresolved_worst},
                            {"gaps", f.gaps},
                            {"lifted_by_shank_or_holder", f.lifted},
-                           {"transverse_step_mm", {{"smallest", f.smallest_step}, {"mean", f.mean_step}, {"largest", f.largest_step}}}});
+                           {"transverse_step_mm", {{"smallest", f.smallest_step}, {"mean", f.mean_step}, {"largest", f.largest_step}}},
+                           {"floor",
+                            {{"area_mm2", p.floor.area},
+                             {"length_mm", p.floor.length},
+                             {"time_s", p.floor.time},
+                             {"cutting_length_over_floor", p.floor.length > 0 ? p.finish_op.path.cutting_length() / p.floor.length : 0.0},
+                             {"cycle_over_floor", p.floor.time > 0 ? p.finish_op.cycle_time / p.floor.time : 0.0}}}});
   }
   if (p.roughing) {
     const CloudRoughing& g = *p.roughing;
@@ -139,7 +162,14 @@ nlohmann::json copy_summary(const CopyRunOptions& o, const CopySettings& s, cons
           {"machine", {{"name", m.name}, {"kinematics", machine::chain_name(m.chain)}}},
           {"cloud_points", r.cloud_points},
           {"obstacle_points", r.obstacle_points},
-          {"stock", {{"lo", vec(r.stock.lo)}, {"hi", vec(r.stock.hi)}}},
+          {"stock", {{"lo", vec(r.stock.lo)}, {"hi", vec(r.stock.hi)}, {"base_top", r.base_top}}},
+          {"rim",
+           {{"side", s.rim_is_side ? "down to the base" : "open"},
+            {"side_depth_mm", s.side_depth},
+            {"rim_points", r.rim.points.size()},
+            {"side_points", r.side_points},
+            {"cell_mm", r.rim.cell},
+            {"obstacle_spacing_mm", r.obstacle_spacing}}},
           {"normals", {{"from_file", r.normals_from_file}, {"points", r.row_points.size()}, {"pca_mean_disagreement_deg", r.pca_disagreement}}},
           {"visibility",
            {{"directions", r.visibility.columns.size()},
@@ -152,6 +182,12 @@ nlohmann::json copy_summary(const CopyRunOptions& o, const CopySettings& s, cons
             {"covered", r.packets.covered},
             {"coverage", r.row_points.empty() ? 0.0 : static_cast<double>(r.packets.covered) / static_cast<double>(r.row_points.size())},
             {"coverage_met", r.packets.coverage_met},
+            {"machinable", r.packets.machinable},
+            {"decided_by", r.packets.decided_by},
+            {"tied_sets", r.packets.tied},
+            {"largest_tilt_deg", r.packets.largest_tilt},
+            {"tilt_sum_deg", r.packets.tilt_sum},
+            {"estimated_finishing_cycle_s", r.packets.estimated_cycle},
             {"overlap_points", r.packets.overlaps},
             {"reattached", r.packets.reattached},
             {"unmachinable", r.packets.unmachinable},
@@ -195,6 +231,10 @@ nlohmann::json scan_summary(const geometry::PointCloud& cloud, const geometry::F
           {"outlier_threshold_mm", outliers.threshold_mm},
           {"typical_spacing_mm", outliers.median_mm},
           {"points_with_normal", r.row_points.size()},
+          {"typical_spacing_mm", r.spacing > 0 ? r.spacing : r.rim.spacing},
+          {"spacing_p90_mm", r.spacing_p90},
+          {"noise_mm", r.noise},
+          {"completion", {{"crease_points", r.crease_points}, {"crease_cells", r.crease_cells}, {"hole_points", r.hole_points}, {"hole_radius_mm", r.hole_radius}}},
           {"coverage_of_points_kept", share(r.packets.covered, cloud.size())},
           {"coverage_of_points_with_normal", share(r.packets.covered, r.row_points.size())}};
 }

@@ -19,8 +19,13 @@ CopySettings defaults() {
   s.normals.diameter = 7;
   s.normals.grid_step = 0.5;
   s.normals.directions = {Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitY()};
-  s.visibility.phi_step = 10, s.visibility.theta_step = 30;
-  s.visibility.cone_min = 5, s.visibility.cone_max = 85;
+  // Every 10 degrees both ways (the seed's hemisphere grid, 648 directions): the hip's 30 degrees of
+  // tilt missed the directions that let three packets do an undercut's work (issue 45: five at 30).
+  s.visibility.phi_step = 10, s.visibility.theta_step = 10;
+  // The window: up to the seed's 85° from the normal, and from 0: a ball cuts at its tip on level
+  // ground in every 3-axis finish a shop runs, and the seed's hollow cone (5° here) would tilt the
+  // tool over a part the vertical sees whole (issue 45). The hollow cone stays a setting.
+  s.visibility.cone_min = 0, s.visibility.cone_max = 85;
   s.visibility.graze = 0.05;
   s.finishing.tool.cutter = {ToolKind::ball, 3, 3};
   s.finishing.tool.gauge_length = 40, s.finishing.tool.holder = RevolvedProfile::endless_cylinder(26.5);
@@ -66,7 +71,10 @@ std::string default_copy_settings() {
   const auto& d = s.normals.directions;
   t << "# drom copy: every key and its default (docs/case-files.md, \"drom copy\").\n"
     << "[cloud]\nscale = " << s.scale << "                 # every coordinate multiplied by it (the seed scaled by 7/20 and 1/3)\n"
-    << "bad_points = \"drop\"          # NaN/Inf points and far outliers: \"drop\" (counted in summary.json) or \"error\"\n\n"
+    << "bad_points = \"drop\"          # NaN/Inf points and far outliers: \"drop\" (counted in summary.json) or \"error\"\n"
+    << "rim = \"side\"                # beyond the scan's edge: \"side\" (the part's side, down to the base) or \"open\" (air)\n"
+    << "side_depth = 0.0            # mm the side goes below the edge; 0: down to the base's top\n"
+    << "completion = true           # creases' lines and points in holes a tool would dip into join the scan\n\n"
     << "[normals]                   # sphere launching (Makki 2009, Algorithm 1)\nsphere_diameter = " << s.normals.diameter << "\ngrid_step = " << s.normals.grid_step
     << "\ndirections = [";
   for (std::size_t i = 0; i < d.size(); ++i) t << (i ? ", " : "") << "[" << d[i].x() << ", " << d[i].y() << ", " << d[i].z() << "]";
@@ -89,7 +97,8 @@ std::string default_copy_settings() {
     << "              # the finishing tool's T and H (roughing.tool_number: the roughing tool's)\nspindle_speed = 0            # rev/min; 0: 300 m/min on the tool's diameter\n"
     << "spindle = \"cw\"\ncoolant = \"off\"             # off, flood or mist\nclearance = " << s.program.clearance << "               # mm above the highest point: where rapids cross\n\n"
     << "[stock]\nbox = []                      # [x0, x1, y0, y1, z0, z1]; empty: the cloud's box grown by margin\nmargin = " << s.stock_margin
-    << "\nbase_is_obstacle = true       # the stock under the cloud stays: never entered\n\n"
+    << "\nbase_is_obstacle = true       # the stock under the cloud stays: never entered\n"
+    << "# base_top = 0.0              # z of the base's top (the table the part stands on); unset: the cloud's lowest point\n\n"
     << "# [[fixtures]]                # solids the tool must not enter (part frame)\n# kind = \"box\"                # box = [x0, x1, y0, y1, z0, z1]\n"
     << "# kind = \"cylinder\"           # centre = [x, y, z0], radius, height (along Z)\n";
   return t.str();
@@ -101,6 +110,9 @@ CopySettings read_copy_settings(const std::string& text, const std::string& orig
   TomlReader r(text, s.origin, overrides);
   s.scale = r.real("cloud.scale", Range::positive(), s.scale);
   s.bad_points_are_errors = r.choice("cloud.bad_points", {"drop", "error"}, s.bad_points_are_errors ? std::string("error") : std::string("drop")) == "error";
+  s.rim_is_side = r.choice("cloud.rim", {"side", "open"}, s.rim_is_side ? std::string("side") : std::string("open")) == "side";
+  s.side_depth = r.real("cloud.side_depth", Range::non_negative(), s.side_depth);
+  s.completion = r.boolean("cloud.completion", s.completion);
 
   s.normals.diameter = r.real("normals.sphere_diameter", Range::positive(), s.normals.diameter);
   s.normals.grid_step = r.real("normals.grid_step", Range::positive(), s.normals.grid_step);
@@ -166,6 +178,7 @@ CopySettings read_copy_settings(const std::string& text, const std::string& orig
   }
   s.stock_margin = r.real("stock.margin", Range::non_negative(), s.stock_margin);
   s.stock_base_is_obstacle = r.boolean("stock.base_is_obstacle", s.stock_base_is_obstacle);
+  if (r.has("stock.base_top")) s.stock_base_top = r.real("stock.base_top", Range{});
 
   for (std::size_t k = 0; k < r.table_count("fixtures"); ++k) {
     const std::string t = "fixtures." + std::to_string(k) + ".";

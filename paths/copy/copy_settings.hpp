@@ -41,8 +41,16 @@ struct CopySettings {
   int roughing_tool_number = 2;
   std::optional<Eigen::Vector3d> stock_lo, stock_hi;  // part frame; none: the cloud's box grown by stock_margin
   double stock_margin = 5;
-  bool stock_base_is_obstacle = true;  // the stock under the cloud's lowest point stays: the tool must not enter it
+  bool stock_base_is_obstacle = true;  // the stock under the part stays: the tool must not enter it
+  std::optional<double> stock_base_top;  // z of the base's top face (the table the part stands on); none: the cloud's lowest point
   std::vector<Obstacle> fixtures;
+  // Beyond the scan's rim is the part's side, not air (geometry/cloud_rim.hpp): key cloud.rim = "side"
+  // (the default) or "open" (nothing is assumed there, as before issue 45). The side goes down to the
+  // base, or `side_depth` mm below the rim when that is set (key cloud.side_depth).
+  bool rim_is_side = true;
+  double side_depth = 0;
+  // The scan completed: its creases' lines and points in its holes (key cloud.completion).
+  bool completion = true;
 };
 
 // The defaults as a TOML text (every key, with comments).

@@ -16,7 +16,7 @@ namespace drom::paths {
 
 double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
 
-PointNormals launch_spheres(std::span<const Eigen::Vector3d> cloud, const SphereLaunchSettings& s) {
+PointNormals launch_spheres(std::span<const Eigen::Vector3d> cloud, const SphereLaunchSettings& s, std::span<const Eigen::Vector3d> blockers) {
   if (!(s.diameter > 0) || !(s.grid_step > 0)) throw std::invalid_argument("sphere launching: the diameter and the grid step must be positive");
   if (s.directions.empty()) throw std::invalid_argument("sphere launching: no launch direction");
   const Tool sphere{ToolKind::ball, s.diameter / 2, s.diameter / 2};
@@ -25,7 +25,8 @@ PointNormals launch_spheres(std::span<const Eigen::Vector3d> cloud, const Sphere
   PointNormals out;
   for (const auto& direction : s.directions) {
     const Eigen::Matrix3d q = geometry::frame_along(direction);
-    const std::vector<Eigen::Vector3d> turned = geometry::rotated(cloud, q);
+    std::vector<Eigen::Vector3d> turned = geometry::rotated(cloud, q);
+    for (const auto& b : blockers) turned.push_back(q * b);  // indices past the cloud's: no normal
     const geometry::CloudBins bins(turned, std::max(s.grid_step, sphere.radius / 2));
     const geometry::Box3 box = geometry::bounding_box(turned);
     const int nx = static_cast<int>(std::floor((box.hi.x() - box.lo.x()) / s.grid_step)) + 1;
@@ -38,7 +39,7 @@ PointNormals launch_spheres(std::span<const Eigen::Vector3d> cloud, const Sphere
         const double x = box.lo.x() + i * s.grid_step, y = box.lo.y() + j * s.grid_step;
         if (s.inside_only && !(bins.max_z_within(x, y, s.grid_step) > -1e300)) continue;
         const Drop d = drop_tool(bins, x, y, sphere);
-        if (!d.contact) continue;
+        if (!d.contact || d.point >= static_cast<int>(cloud.size())) continue;
         found[static_cast<std::size_t>(j)].emplace_back(d.point, q.transpose() * d.normal);
       }
     });

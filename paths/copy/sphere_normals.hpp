@@ -32,8 +32,10 @@ struct PointNormals {
   long long contacts = 0;                // spheres that landed on the cloud and were counted
 };
 
+// `blockers`: points a sphere may land on that get no normal (the part's side below a scan's rim:
+// a sphere launched from beside the part lands on it, not on the rim's points from the side).
 // Throws std::invalid_argument on a non-positive diameter or grid step, or no direction.
-PointNormals launch_spheres(std::span<const Eigen::Vector3d> cloud, const SphereLaunchSettings& settings);
+PointNormals launch_spheres(std::span<const Eigen::Vector3d> cloud, const SphereLaunchSettings& settings, std::span<const Eigen::Vector3d> blockers = {});
 
 // The angle (rad) between two unit vectors.
 double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b);

@@ -46,13 +46,15 @@ std::vector<Eigen::Vector3d> obstacle_surface(const Obstacle& o, double spacing)
     for (int axis = 0; axis < 3; ++axis) {
       const int u = (axis + 1) % 3, v = (axis + 2) % 3;
       const int nu = count(size[u]), nv = count(size[v]);
-      for (const double level : {o.lo[axis], o.hi[axis]})
+      for (const double level : {o.lo[axis], o.hi[axis]}) {
+        if (axis == 2 && level == o.lo[axis] && !o.bottom) continue;
         for (int a = 0; a <= nu; ++a)
           for (int b = 0; b <= nv; ++b) {
             Eigen::Vector3d p;
             p[axis] = level, p[u] = o.lo[u] + size[u] * a / nu, p[v] = o.lo[v] + size[v] * b / nv;
             out.push_back(p);
           }
+      }
     }
   } else {
     const double radius = o.hi.x(), height = o.hi.z() - o.lo.z();

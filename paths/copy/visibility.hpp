@@ -39,6 +39,7 @@ struct Obstacle {
   std::string name = "fixture";
   enum class Kind { box, cylinder } kind = Kind::box;
   Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();  // box corners; cylinder: lo = base centre, hi.z() = top, hi.x() = radius
+  bool bottom = true;  // the box's bottom face sampled too (the stock's base stands on the table: it is not)
 };
 // The obstacle's surface sampled at `spacing` mm: the points the tests and the drop see.
 std::vector<Eigen::Vector3d> obstacle_surface(const Obstacle& obstacle, double spacing);

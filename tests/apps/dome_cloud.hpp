@@ -23,3 +23,13 @@ inline std::string dome_ply(const std::vector<std::string>& extra = {}) {
   return "ply\nformat ascii 1.0\nelement vertex " + std::to_string(n) +
          "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nend_header\n" + body.str();
 }
+
+// How many of the dome's points lie beyond `polar` degrees from its top.
+inline int dome_points_past(double polar_degrees) {
+  int n = 0;
+  for (int i = 0; i <= 23; ++i) {
+    const double polar = M_PI / 2 * i / 23, r = 15 * std::sin(polar);
+    if (polar * 180 / M_PI > polar_degrees) n += std::max(1, static_cast<int>(std::ceil(2 * M_PI * r)));
+  }
+  return n;
+}

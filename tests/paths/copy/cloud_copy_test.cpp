@@ -37,7 +37,9 @@ TEST(CloudCopy, FemurHeadOnANeckIsCoveredByFewPacketsAndRoughedWithNoCollision) 
   EXPECT_LT(best, 0.95 * n);
   ASSERT_GE(r.packets.directions.size(), 2u);
   EXPECT_TRUE(r.packets.coverage_met);
-  EXPECT_GE(r.packets.covered, 0.95 * n);
+  // 95 % of the machinable points (issue 45: those some direction the machine reaches sees with the
+  // whole tool clear; the rest of the ball's underside is out of the holder's reach).
+  EXPECT_GE(r.packets.covered, 0.95 * r.packets.machinable);
   for (std::size_t k = 0; k < r.plans.size(); ++k) {
     const PacketPlan& p = r.plans[k];
     EXPECT_TRUE(p.error.empty()) << p.error;

@@ -1,0 +1,68 @@
+#include "geometry/cloud_creases.hpp"
+
+#include "geometry/cloud_cells.hpp"
+
+#include <Eigen/Dense>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace drom::geometry {
+
+Creases crease_points(std::span<const Eigen::Vector3d> points, double noise, double spacing) {
+  Creases out;
+  if (points.size() < 30 || !(spacing > 0)) return out;
+  const double s = typical_spacing(points);
+  if (!(s > 0)) return out;
+  out.cell = std::max(0.2, 1.5 * s);
+  const CloudCells cells = thin_cloud(points, out.cell, 2.5 * out.cell);
+  const double flat = 3 * noise + 0.005;  // what a flat face may leave, mm
+  std::vector<std::vector<Eigen::Vector3d>> found(cells.centroids.size());
+  tbb::parallel_for(std::size_t(0), cells.centroids.size(), [&](std::size_t i) {
+    // The cell's points and its neighbours', at most about 400.
+    std::size_t total = cells.members[i].size();
+    for (const int k : cells.neighbours[i]) total += cells.members[static_cast<std::size_t>(k)].size();
+    const std::size_t stride = std::max<std::size_t>(1, total / 400);
+    std::vector<Eigen::Vector3d> q;
+    std::size_t seen = 0;
+    const auto take = [&](const std::vector<int>& members) {
+      for (const int m : members)
+        if (seen++ % stride == 0) q.push_back(points[static_cast<std::size_t>(m)]);
+    };
+    take(cells.members[i]);
+    for (const int k : cells.neighbours[i]) take(cells.members[static_cast<std::size_t>(k)]);
+    if (q.size() < 20) return;
+    const LocalPlane frame = fit_plane(q);
+    if (std::sqrt(frame.spread[0]) <= flat) return;     // flat: no crease
+    const double smooth = fit_quadric(q, frame);
+    if (smooth <= flat) return;                           // curved, but smooth
+    const TwoPlanes two = fit_two_planes(q, frame, 2.5 * out.cell, flat, smooth);
+    if (!two.found) return;
+    const Eigen::Vector3d t = two.line_direction, x0 = two.line_point;
+    // The line must run through this cell's points (a crease here, not one extrapolated to).
+    const Eigen::Vector3d& centroid = cells.centroids[i];
+    const Eigen::Vector3d off = (centroid - x0) - (centroid - x0).dot(t) * t;
+    if (off.norm() > out.cell) return;
+    // Over the cell's extent along the line, and half a cell beyond either end: the segments of
+    // neighbouring cells overlap, and a cell the test missed leaves no gap in the line.
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const int mbr : cells.members[i]) {
+      const double along = (points[static_cast<std::size_t>(mbr)] - x0).dot(t);
+      lo = std::min(lo, along), hi = std::max(hi, along);
+    }
+    lo -= 0.5 * out.cell, hi += 0.5 * out.cell;
+    const int n = std::max(1, static_cast<int>(std::ceil((hi - lo) / spacing)));
+    for (int k = 0; k <= n; ++k) found[i].push_back(x0 + (lo + (hi - lo) * k / n) * t);
+  });
+  for (std::size_t i = 0; i < found.size(); ++i) {
+    if (found[i].empty()) continue;
+    ++out.cells;
+    out.points.insert(out.points.end(), found[i].begin(), found[i].end());
+    out.source.insert(out.source.end(), found[i].size(), cells.members[i].front());
+  }
+  return out;
+}
+
+}  // namespace drom::geometry

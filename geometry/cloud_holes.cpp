@@ -1,0 +1,138 @@
+#include "geometry/cloud_holes.hpp"
+
+#include "geometry/cloud_cells.hpp"
+#include "geometry/cloud_kdtree.hpp"
+
+#include <Eigen/Dense>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace drom::geometry {
+
+FilledHoles fill_holes(std::span<const Eigen::Vector3d> points, double hole, double noise) {
+  FilledHoles out;
+  if (points.size() < 17 || !(hole > 0)) return out;
+  out.spacing = typical_spacing(points, &out.spacing_p90);
+  if (out.spacing_p90 < hole / 1.5) return out;
+  out.needed = true;
+  const CloudKdTree tree(points);
+  const double step = hole * std::sqrt(2.0);
+  const double flat = 3 * noise + 0.005;  // what a flat face may leave, mm
+  constexpr int k = 16;
+  std::vector<std::vector<Eigen::Vector3d>> found(points.size());
+  tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t i) {
+    std::vector<int> near;
+    std::vector<double> d2;
+    tree.nearest(points[i], k, near, d2);
+    if (near.size() < 10) return;
+    std::vector<Eigen::Vector3d> q;
+    for (const int j : near) q.push_back(points[static_cast<std::size_t>(j)]);
+    const LocalSurface local(q, flat);
+    if (local.kind() == LocalSurface::Kind::none) return;
+    const LocalPlane& frame = local.frame();
+    std::vector<Eigen::Vector2d> uv(q.size());
+    for (std::size_t r = 0; r < q.size(); ++r) uv[r] = local.uv(q[r]);
+    const Eigen::Vector3d self = points[i] - frame.centroid;
+    const Eigen::Vector2d me(self.dot(frame.u), self.dot(frame.v));
+    // This point's Voronoi cell may reach as far as its farthest neighbour: a grid over that square,
+    // anchored on the point.
+    double reach = 0;
+    for (const auto& p : uv) reach = std::max(reach, (p - me).norm());
+    const double w_lo = local.lowest(), w_hi = local.highest();
+    const double margin = flat + 0.05 * reach;
+    std::vector<int> around;
+    std::vector<double> around_d2;
+    // A surface point `on` (with its normal) offered as a fill: this point's cell (it is the scan's
+    // nearest to it), a hole (none within `hole`), and inside the scan (its nearest points all round
+    // it in the plane (u, v), no half-plane free: not past the rim); put three times the fit's own
+    // uncertainty there above and below.
+    const auto offer = [&](const Eigen::Vector3d& on, const Eigen::Vector3d& normal, const Eigen::Vector3d& u, const Eigen::Vector3d& v, double spread) {
+      if (!(spread <= 4)) return;
+      tree.nearest(on, 12, around, around_d2);
+      if (around.empty() || around_d2.front() < (on - points[i]).squaredNorm() - 1e-12) return;
+      if (around_d2.front() <= hole * hole) return;
+      std::vector<double> angles;
+      for (const int m : around) {
+        const Eigen::Vector3d t = points[static_cast<std::size_t>(m)] - on;
+        angles.push_back(std::atan2(t.dot(v), t.dot(u)));
+      }
+      std::sort(angles.begin(), angles.end());
+      double widest = angles.front() + 2 * std::numbers::pi - angles.back();
+      for (std::size_t r = 1; r < angles.size(); ++r) widest = std::max(widest, angles[r] - angles[r - 1]);
+      if (widest >= std::numbers::pi * 0.9) return;
+      const double lift = 3 * noise * std::sqrt(spread);
+      if (lift > 0) {
+        found[i].push_back(on + lift * normal);
+        found[i].push_back(on - lift * normal);
+      } else {
+        found[i].push_back(on);
+      }
+    };
+    const int span = static_cast<int>(std::ceil(reach / step));
+    if (local.kind() == LocalSurface::Kind::crease) {
+      // At a crease, each plane on a grid of its own, on its side of the line (seen from another
+      // frame, a steep plane is a thin band where the grid's spots pile up or go missing).
+      const TwoPlanes& two = local.crease();
+      for (const bool a : {true, false}) {
+        const Eigen::Vector3d& n = a ? two.normal_a : two.normal_b;
+        const Eigen::Vector3d& o = a ? two.point_a : two.point_b;
+        const Eigen::Vector3d u = two.line_direction, v = n.cross(u).normalized();
+        const double side = (o - two.line_point).dot(v) >= 0 ? 1.0 : -1.0;  // the plane's own points lie this way from the line
+        const Eigen::Vector3d foot = points[i] - n.dot(points[i] - o) * n;
+        for (int b = -span; b <= span; ++b)
+          for (int e = -span; e <= span; ++e) {
+            const Eigen::Vector3d on = foot + step * (e * u + b * v);
+            const double own = (on - points[i]).norm();
+            if (own <= hole || own > reach) continue;
+            if (side * (on - two.line_point).dot(v) < 0) continue;
+            bool covered = false;
+            for (const auto& p : q) covered = covered || (p - on).norm() <= hole;
+            if (covered) continue;
+            offer(on, n, u, v, local.leverage(local.uv(on)));
+          }
+      }
+    } else {
+      for (int b = -span; b <= span; ++b)
+        for (int e = -span; e <= span; ++e) {
+          const Eigen::Vector2d g = me + step * Eigen::Vector2d(e, b);
+          const double own = (g - me).norm();
+          if (own <= hole || own > reach) continue;
+          // Near one of this point's own neighbours (the usual case, a dense spot): not a hole.
+          bool covered = false;
+          for (const auto& p : uv) covered = covered || (p - g).norm() <= hole;
+          if (covered) continue;
+          const Eigen::Vector3d on = local.at(g);
+          if (std::isnan(on.x())) continue;
+          // Interpolation, not extrapolation: no higher or lower over the plane than the neighbours
+          // stand, but by what a curved face may bulge between them (a quadric's). A face next to a
+          // crease rises above every point towards the line: it is trusted.
+          const double w = (on - frame.centroid).dot(frame.normal);
+          if (local.kind() == LocalSurface::Kind::quadric && (w > w_hi + margin || w < w_lo - margin)) continue;
+          offer(on, frame.normal, frame.u, frame.v, local.leverage(g));
+        }
+    }
+    // The crease's own line, in this point's cell, where no point stands within `hole` of it.
+    if (local.kind() == LocalSurface::Kind::crease) {
+      const TwoPlanes& two = local.crease();
+      const int n = static_cast<int>(std::ceil(reach / step));
+      for (int t = -n; t <= n; ++t) {
+        const Eigen::Vector3d on = two.line_point + (t * step) * two.line_direction;
+        if ((on - points[i]).norm() > reach) continue;
+        tree.nearest(on, 1, around, around_d2);
+        if (around.empty() || around_d2.front() < (on - points[i]).squaredNorm() - 1e-12 || around_d2.front() <= hole * hole) continue;
+        found[i].push_back(on);
+      }
+    }
+  });
+  for (std::size_t i = 0; i < found.size(); ++i) {
+    out.points.insert(out.points.end(), found[i].begin(), found[i].end());
+    out.source.insert(out.source.end(), found[i].size(), static_cast<int>(i));
+  }
+  return out;
+}
+
+}  // namespace drom::geometry

@@ -1,0 +1,193 @@
+#include "geometry/cloud_rim.hpp"
+
+#include "geometry/cloud_cells.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <stdexcept>
+#include <tuple>
+#include <unordered_map>
+
+namespace drom::geometry {
+
+CloudRim find_rim(std::span<const Eigen::Vector3d> points, double noise, double step, double margin, double cell, double gap_degrees) {
+  CloudRim rim;
+  if (points.size() < 4) return rim;
+  rim.spacing = typical_spacing(points);
+  rim.cell = cell > 0 ? cell : std::max(0.2, 1.5 * rim.spacing);
+  const CloudCells cells = thin_cloud(points, rim.cell, 2.5 * rim.cell);
+  const auto& c = cells.centroids;
+  const double gap = gap_degrees * std::numbers::pi / 180;
+  const std::size_t n = c.size();
+  std::vector<char> on_rim(n, 0);
+  std::vector<Eigen::Vector3d> outward(n, Eigen::Vector3d::Zero());
+  std::vector<double> gaps(n, 0);
+  std::vector<std::size_t> counts;
+  for (const auto& near : cells.neighbours) counts.push_back(near.size());
+  std::nth_element(counts.begin(), counts.begin() + static_cast<std::ptrdiff_t>(counts.size() / 2), counts.end());
+  const double typical_neighbours = counts.empty() ? 0.0 : static_cast<double>(counts[counts.size() / 2]);
+  tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+    const std::vector<int>& near = cells.neighbours[i];
+    if (near.size() < 3) {  // a fragment: all edge
+      on_rim[i] = 1;
+      return;
+    }
+    std::vector<Eigen::Vector3d> around = {c[i]};
+    for (const int k : near) around.push_back(c[static_cast<std::size_t>(k)]);
+    const LocalPlane plane = fit_plane(around);
+    std::vector<double> angles;
+    for (const int k : near) {
+      const Eigen::Vector3d d = c[static_cast<std::size_t>(k)] - c[i];
+      angles.push_back(std::atan2(d.dot(plane.v), d.dot(plane.u)));
+    }
+    std::sort(angles.begin(), angles.end());
+    double widest = angles.front() + 2 * std::numbers::pi - angles.back(), middle = angles.back() + 0.5 * widest;
+    for (std::size_t k = 1; k < angles.size(); ++k)
+      if (angles[k] - angles[k - 1] > widest) widest = angles[k] - angles[k - 1], middle = angles[k - 1] + 0.5 * widest;
+    if (widest >= gap) {
+      on_rim[i] = 1;
+      outward[i] = std::cos(middle) * plane.u + std::sin(middle) * plane.v;
+      gaps[i] = widest;
+      return;
+    }
+    // Where the neighbourhood is not a plane (the end of a sharp crest at the rim, its flanks folded
+    // round), the gap seen in the least-squares plane can close: the neighbours' centroid standing
+    // off to one side, in that plane, by more than 30 % of the radius, is a rim too.
+    Eigen::Vector3d shift = plane.centroid - c[i];
+    const Eigen::Vector3d in_plane = shift - shift.dot(plane.normal) * plane.normal;
+    // Or, its plane folded past telling sides, when it has at most 65 % of the neighbours a cell
+    // amid the scan has (a half-disc holds half of them).
+    const bool few = static_cast<double>(near.size()) <= 0.65 * typical_neighbours;
+    if (in_plane.norm() > 0.3 * 2.5 * rim.cell || (few && shift.norm() > 0.2 * 2.5 * rim.cell)) {
+      on_rim[i] = 1;
+      outward[i] = -(few ? shift : in_plane).normalized();
+      gaps[i] = std::numbers::pi;
+    }
+  });
+  std::vector<int> rim_index(n, -1);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!on_rim[i]) continue;
+    // The cell's outermost scanned point (a lone fragment's: its centroid's nearest).
+    int best = cells.members[i].front();
+    double reach = -std::numeric_limits<double>::infinity();
+    for (const int k : cells.members[i]) {
+      const Eigen::Vector3d& p = points[static_cast<std::size_t>(k)];
+      const double along = outward[i].norm() > 0 ? (p - c[i]).dot(outward[i]) : -(p - c[i]).norm();
+      if (along > reach) reach = along, best = k;
+    }
+    rim_index[i] = static_cast<int>(rim.points.size());
+    rim.points.push_back(points[static_cast<std::size_t>(best)]);
+    rim.outward.push_back(outward[i]);
+    rim.gap.push_back(gaps[i]);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (rim_index[i] < 0) continue;
+    for (const int k : cells.neighbours[i])
+      if (rim_index[static_cast<std::size_t>(k)] > rim_index[i]) rim.links.emplace_back(rim_index[i], rim_index[static_cast<std::size_t>(k)]);
+  }
+  // The sheet continued: from each rim point, on its cell's local surface, out to where the part's
+  // edge may be (a lone fragment's, whose outward is unknown, stays where it is).
+  rim.edge.resize(rim.points.size());
+  rim.strip.resize(rim.points.size());
+  const double flat = 3 * noise + 0.005;
+  tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+    const int r = rim_index[i];
+    if (r < 0) return;
+    const std::size_t k = static_cast<std::size_t>(r);
+    rim.edge[k] = rim.points[k];
+    if (!(rim.outward[k].norm() > 0)) return;
+    const double half = 0.5 * std::min(rim.gap[k], 2 * std::numbers::pi - 1e-3);
+    const double reach = 3 * std::min(1.5, 1 / std::max(0.5, std::sin(half))) * rim.spacing;
+    // The cell's points and its neighbours', the rim point's nearest first, at most about 400.
+    std::vector<Eigen::Vector3d> q;
+    std::vector<int> all = cells.members[i];
+    for (const int m : cells.neighbours[i]) all.insert(all.end(), cells.members[static_cast<std::size_t>(m)].begin(), cells.members[static_cast<std::size_t>(m)].end());
+    std::sort(all.begin(), all.end(), [&](int a, int b) {
+      return (points[static_cast<std::size_t>(a)] - rim.points[k]).squaredNorm() < (points[static_cast<std::size_t>(b)] - rim.points[k]).squaredNorm();
+    });
+    const std::size_t stride = std::max<std::size_t>(1, all.size() / 400);
+    for (std::size_t m = 0; m < all.size(); m += stride) q.push_back(points[static_cast<std::size_t>(all[m])]);
+    const LocalSurface local(q, flat);
+    const auto straight = [&](double t) { return rim.points[k] + t * rim.outward[k]; };
+    Eigen::Vector2d from = local.uv(rim.points[k]), out(rim.outward[k].dot(local.frame().u), rim.outward[k].dot(local.frame().v));
+    const bool on_surface = local.kind() != LocalSurface::Kind::none && out.norm() > 0.5;
+    if (on_surface) out.normalize();
+    const int count = std::max(1, static_cast<int>(std::ceil(reach / step)));
+    for (int t = 1; t <= count; ++t) {
+      const double along = reach * t / count;
+      Eigen::Vector3d p = straight(along);
+      double lift = margin;
+      if (on_surface) {
+        const Eigen::Vector2d g = from + along * out;
+        const Eigen::Vector3d s = local.at(g);
+        if (std::isfinite(s.x())) p = s, lift += 3 * noise * std::sqrt(local.leverage(g));
+      }
+      if (lift > 0) {
+        rim.strip[k].push_back(p + lift * local.frame().normal);
+        rim.strip[k].push_back(p - lift * local.frame().normal);
+      } else {
+        rim.strip[k].push_back(p);
+      }
+      if (t == count) rim.edge[k] = p + lift * (local.frame().normal.z() >= 0 ? 1.0 : -1.0) * local.frame().normal;
+    }
+  });
+  return rim;
+}
+
+std::vector<Eigen::Vector3d> side_points(const CloudRim& rim, double base_top, double spacing, double depth) {
+  if (!(spacing > 0)) throw std::invalid_argument("side_points: the spacing must be positive");
+  // One line per `spacing` square of XY (the highest top in it): the links between rim neighbours
+  // overlap, and a line every spacing along the rim is all the wall needs.
+  std::unordered_map<std::uint64_t, Eigen::Vector3d> tops;
+  const auto cell = [&](const Eigen::Vector3d& p) {
+    const auto i = static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(p.x() / spacing)) + (std::int64_t{1} << 30));
+    const auto j = static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(p.y() / spacing)) + (std::int64_t{1} << 30));
+    return (i << 32) | j;
+  };
+  const auto offer = [&](const Eigen::Vector3d& p) {
+    auto [it, fresh] = tops.emplace(cell(p), p);
+    if (!fresh && p.z() > it->second.z()) it->second = p;
+  };
+  const std::vector<Eigen::Vector3d>& edge = rim.edge;
+  for (const auto& p : edge) offer(p);
+  for (const auto& [i, j] : rim.links) {
+    const Eigen::Vector3d &a = edge[static_cast<std::size_t>(i)], &b = edge[static_cast<std::size_t>(j)];
+    const int n = static_cast<int>(std::ceil((b - a).norm() / spacing));
+    for (int k = 1; k < n; ++k) offer(a + (b - a) * (static_cast<double>(k) / n));
+  }
+  std::vector<Eigen::Vector3d> ordered;
+  ordered.reserve(tops.size());
+  for (const auto& [key, p] : tops) ordered.push_back(p);
+  std::sort(ordered.begin(), ordered.end(), [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return std::tie(a.x(), a.y(), a.z()) < std::tie(b.x(), b.y(), b.z()); });
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& top : ordered) {
+    const double height = depth > 0 ? std::min(depth, top.z() - base_top) : top.z() - base_top;
+    if (!(height > 0)) continue;
+    const int n = static_cast<int>(std::ceil(height / spacing));
+    for (int k = 1; k <= n; ++k) out.emplace_back(top.x(), top.y(), top.z() - height * k / n);
+  }
+  // The strips between the rim and the side: each rim point's, and between neighbouring rim points
+  // the points of their two strips joined, every spacing.
+  std::unordered_map<std::uint64_t, char> taken;  // one strip point per half-spacing cube
+  const auto keep = [&](const Eigen::Vector3d& p) {
+    std::uint64_t key = 0;
+    for (int a = 0; a < 3; ++a) key = key * 2097152u + static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(p[a] / (0.5 * spacing))) + (std::int64_t{1} << 20));
+    if (taken.emplace(key, 1).second) out.push_back(p);
+  };
+  for (const auto& strip : rim.strip)
+    for (const auto& p : strip) keep(p);
+  for (const auto& [i, j] : rim.links) {
+    const auto &a = rim.strip[static_cast<std::size_t>(i)], &b = rim.strip[static_cast<std::size_t>(j)];
+    for (std::size_t m = 0; m < std::min(a.size(), b.size()); ++m) {
+      const int n = static_cast<int>(std::ceil((b[m] - a[m]).norm() / spacing));
+      for (int t = 1; t < n; ++t) keep(a[m] + (b[m] - a[m]) * (static_cast<double>(t) / n));
+    }
+  }
+  return out;
+}
+
+}  // namespace drom::geometry

@@ -1,0 +1,168 @@
+// Issue 45, checks 1-3: drom copy on a family of shapes it was not tuned to (tests/paths/copy/
+// shape_family.hpp: caps, domes, saddles, steps with a wall, undercuts, holes, sharp ridges; noise 0 to
+// 0.1 mm, spacing 0.1 to 1 mm, stray points), each copied with the default settings (ball D6 on a D53
+// holder 40 mm out, ucp710_like) and its posted CL files judged by a checker that shares no code with
+// the planner (tests/paths/copy/independent_checker.hpp):
+//   - no posted move takes the whole tool deeper than Tu into the scan, by drom's own check and by the
+//     checker's; none deeper than Tu into the true surface (every face, the hidden sides and the base);
+//   - the finishing reaches at least 99 % of the true points a direction of the machine could finish;
+//   - a convex height field is one vertical packet; a shape with an undercut the fewest packets
+//     the checker's own search finds, each within the machine's strokes.
+// The quick family (one shape per kind) runs in the default suite, the full family (five per kind)
+// under the heavy label.
+#include "paths/copy/copy_run.hpp"
+#include "tests/paths/copy/independent_checker.hpp"
+#include "tests/paths/copy/shape_family.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using namespace drom::tests;
+
+namespace {
+
+constexpr double kTu = 0.01;  // the default chord tolerance
+
+fs::path scratch(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / ("drom_shape_family_" + std::to_string(::getpid())) / name;
+  fs::create_directories(p);
+  return p;
+}
+
+// The test's own PLY writer (ascii, points only): the scan as a scanner would hand it over.
+void write_scan(const fs::path& file, const family::Shape& s) {
+  std::ofstream out(file);
+  out << "ply\nformat ascii 1.0\nelement vertex " << s.scan.points.size() << "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
+  char line[128];
+  for (const auto& p : s.scan.points) {
+    std::snprintf(line, sizeof line, "%.6f %.6f %.6f\n", p.x(), p.y(), p.z());
+    out << line;
+  }
+}
+
+checker::ToolSpec finishing_tool() {
+  checker::ToolSpec t;
+  t.kind = checker::ToolSpec::Kind::ball, t.radius = 3, t.corner = 3, t.gauge_length = 40, t.holder_radius = 26.5;
+  return t;
+}
+
+checker::ToolSpec roughing_tool() {
+  checker::ToolSpec t;
+  t.kind = checker::ToolSpec::Kind::flat, t.radius = 5, t.corner = 0, t.gauge_length = 40, t.holder_radius = 26.5;
+  return t;
+}
+
+void check_shape(const family::Shape& shape, bool expect_fewest) {
+  SCOPED_TRACE(shape.name);
+  std::printf("%s\n", shape.name.c_str());
+  const fs::path dir = scratch(std::string(family::kind_name(shape.kind)) + "_" + std::to_string(shape.index));
+  write_scan(dir / "scan.ply", shape);
+  drom::paths::CopyRunOptions o;
+  o.cloud = dir / "scan.ply";
+  o.out = dir / "copy";
+  o.quiet = true;
+  // The stock as the shop states it: its base's top is the table the part stands on, z = 0.
+  o.overrides = {"stock.base_top=0"};
+  const nlohmann::json s = drom::paths::run_copy(o);
+
+  // The truth: every face of the solid, the hidden sides and the stock's base (the cloud's box grown
+  // by the stock margin of 5 mm, as drom's default stock is).
+  std::vector<Eigen::Vector3d> scan(shape.scan.points.begin(), shape.scan.points.end() - static_cast<long>(shape.outliers));
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  for (const auto& p : scan) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  std::vector<Eigen::Vector3d> solid = shape.scanned_truth.points;
+  solid.insert(solid.end(), shape.hidden_truth.points.begin(), shape.hidden_truth.points.end());
+  const auto base = checker::base_points(lo.head<2>().array() - 5, hi.head<2>().array() + 5, 0, -5, 0.25);
+  solid.insert(solid.end(), base.begin(), base.end());
+
+  // Where the scan ends, the part's true edge lies somewhere in the next gap: the true points within
+  // 1.5 spacings of it are judged apart, held to Tu plus the sag a ball takes over a spacing and three
+  // noise deviations (drom keeps the part's side beyond the rim, paths/copy: cloud_rim); everywhere
+  // else, every face hidden or shown, to Tu.
+  const double edge_band = 1.5 * shape.spacing, edge_allowance = shape.spacing * shape.spacing / (8 * 3) + 3 * shape.noise;
+  std::vector<checker::ClFile> finishing;
+  const int packets = s["grouping"]["packets"].get<int>();
+  std::printf("  drom: %d packet(s), coverage %.4f, unmachinable %d\n", packets, s["grouping"]["coverage"].get<double>(), s["grouping"]["unmachinable"].get<int>());
+  for (int k = 0; k < packets; ++k) {
+    const auto& p = s["packets"][static_cast<std::size_t>(k)];
+    const fs::path folder = o.out / ("packet_" + std::to_string(k + 1));
+    const double tilt = std::acos(std::clamp(p["axis"][2].get<double>(), -1.0, 1.0)) * 180 / std::numbers::pi;
+    for (const char* op : {"finishing", "roughing"}) {
+      if (!p.contains(op) || !fs::exists(folder / (std::string(op) + "_cl.csv"))) continue;
+      const bool finish = std::string(op) == "finishing";
+      const checker::ClFile cl = checker::read_cl_csv(folder / (std::string(op) + "_cl.csv"));
+      const double tolerance = finish ? kTu : 0.0;
+      const checker::PathResult r = checker::check_path(cl, finish ? finishing_tool() : roughing_tool(), scan, solid, tolerance, shape.open_edge, edge_band, tolerance + edge_allowance);
+      std::printf("  packet %d (tilt %.0f deg) %-9s: drom %lld over (deepest %.4f); checker %lld moves, over %lld / %lld / %lld, deepest %.4f (cloud) %.4f (truth) at (%.2f, %.2f, %.2f), "
+                  "%.4f at the open edge\n",
+                  k + 1, tilt, op, p[op]["check"]["positions_over_tolerance"].get<long long>(), p[op]["check"]["deepest_mm"].get<double>(), r.positions, r.over_cloud,
+                  r.over_truth, r.over_edge, r.deepest_cloud, r.deepest_truth, r.worst_truth_part.x(), r.worst_truth_part.y(), r.worst_truth_part.z(), r.deepest_at_edge);
+      if (!r.first_over.empty()) std::printf("    first over: %s\n", r.first_over.c_str());
+      EXPECT_EQ(p[op]["check"]["positions_over_tolerance"].get<long long>(), 0) << "packet " << k + 1 << " " << op << " by drom's check";
+      EXPECT_EQ(r.over_cloud, 0) << "packet " << k + 1 << " " << op << ": deepest into the scan " << r.deepest_cloud;
+      EXPECT_LE(r.deepest_truth, tolerance + 1e-6) << "packet " << k + 1 << " " << op << " into the true solid at " << r.worst_truth_part.transpose();
+      EXPECT_LE(r.deepest_at_edge, tolerance + edge_allowance + 1e-6) << "packet " << k + 1 << " " << op << " at the open edge, " << r.worst_edge_part.transpose();
+      if (finish) finishing.push_back(cl);
+    }
+  }
+
+  checker::CoverageSettings c;
+  c.tool = finishing_tool();
+  // Reached (the finishing passed there): within the scallop bound, the chord tolerance, six noise
+  // deviations (drom rides the noise's highest points, and stays above what it cannot tell), twice the
+  // sag a ball may take between points `spacing` apart, and 0.05 mm, of the true surface. A point no
+  // pass reached is a tool radius or more from every pass.
+  c.reached = 0.005 + kTu + 6 * shape.noise + shape.spacing * shape.spacing / (2 * 3) + 0.05;
+  // Near an open sheet's edge the scan cannot tell where the part ends better than a few spacings
+  // (drom keeps its side three spacings out): not judged there.
+  c.unsure = shape.hidden_truth.points;
+  c.unsure_radius = 3.5 * shape.spacing;
+  const checker::CoverageResult cov = checker::check_coverage(finishing, shape.scanned_truth.points, shape.scanned_truth.normals, solid, c);
+  std::printf("  checker: %lld of %lld sampled true points machinable, %lld reached (%.2f %%), scallop %.4f mm (99 %%: %.4f)\n", cov.machinable, cov.sampled, cov.reached,
+              100 * cov.coverage, cov.scallop, cov.scallop_p99);
+  EXPECT_GE(cov.coverage, 0.99);
+  for (std::size_t k = 0; k < std::min<std::size_t>(cov.missed.size(), 5); ++k) std::printf("  missed (%.2f, %.2f, %.2f)\n", cov.missed[k].x(), cov.missed[k].y(), cov.missed[k].z());
+  if (shape.convex_height_field) {
+    EXPECT_EQ(packets, 1);
+    if (packets >= 1) {
+      EXPECT_NEAR(s["packets"][0]["axis"][2].get<double>(), 1.0, 1e-9) << "a convex height field is a 3-axis job";
+    }
+  }
+  if (shape.undercut && expect_fewest) {
+    const int fewest = checker::fewest_directions(shape.scanned_truth.points, shape.scanned_truth.normals, solid, c, 0.95);
+    std::printf("  checker: the fewest directions reaching 95 %% of the machinable points: %d\n", fewest);
+    EXPECT_LE(packets, fewest);
+  }
+  for (const auto& p : s["packets"])
+    for (const char* op : {"finishing", "roughing"})
+      if (p.contains(op) && p[op].contains("program_verdict")) {
+        EXPECT_TRUE(p[op]["program_verdict"]["runnable"].get<bool>()) << "within the strokes";
+      }
+}
+
+class QuickFamily : public ::testing::TestWithParam<int> {};
+class FullFamily : public ::testing::TestWithParam<int> {};
+
+const std::vector<family::Shape>& quick() {
+  static const std::vector<family::Shape> shapes = family::make_family(1, 4545, 40000);
+  return shapes;
+}
+const std::vector<family::Shape>& full() {
+  static const std::vector<family::Shape> shapes = family::make_family(5, 9191, 60000);
+  return shapes;
+}
+
+}  // namespace
+
+TEST_P(QuickFamily, PostedPacketsKeepTheToleranceAndCoverTheShape) { check_shape(quick()[static_cast<std::size_t>(GetParam())], true); }
+INSTANTIATE_TEST_SUITE_P(Shapes, QuickFamily, ::testing::Range(0, 7));
+
+TEST_P(FullFamily, PostedPacketsKeepTheToleranceAndCoverTheShape) { check_shape(full()[static_cast<std::size_t>(GetParam())], true); }
+INSTANTIATE_TEST_SUITE_P(Shapes, FullFamily, ::testing::Range(0, 35));
