@@ -51,16 +51,24 @@ class CloudBins {
   // Every point within r of (x, y) in XY (distance <= r), by index in the cloud.
   void within(double x, double y, double r, std::vector<int>& out) const;
 
+  // The pyramid, for searches of their own (the tool drop's): level l's blocks are 2^l cells wide;
+  // the highest z in a block (-infinity when empty), and the squared distance from (x, y) to it.
+  int levels() const { return static_cast<int>(levels_.size()); }
+  int level_nx(int l) const { return level_nx_[static_cast<std::size_t>(l)]; }
+  int level_ny(int l) const { return level_ny_[static_cast<std::size_t>(l)]; }
+  double block_top(int l, int i, int j) const { return level_max(l, i, j); }
+  double block_distance2(int l, int i, int j, double x, double y) const;
+  // The level whose blocks are about r wide, and its blocks overlapping the square of half-side r.
+  int start_level(double r) const;
+  bool block_range(int l, double x, double y, double r, int& i0, int& i1, int& j0, int& j1) const;
+
  private:
   std::size_t cell_id(int i, int j) const { return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i); }
   // The pyramid: level l's cell (i, j) covers level 0's cells [i 2^l, (i + 1) 2^l) x [j 2^l, (j + 1) 2^l).
   double level_max(int l, int i, int j) const { return levels_[static_cast<std::size_t>(l)][static_cast<std::size_t>(j) * static_cast<std::size_t>(level_nx_[static_cast<std::size_t>(l)]) + static_cast<std::size_t>(i)]; }
-  double block_distance2(int l, int i, int j, double x, double y) const;
   double block_far_distance2(int l, int i, int j, double x, double y) const;
   void max_in_block(int l, int i, int j, double x, double y, double r2, double& best) const;
   bool above_in_block(int l, int i, int j, double x, double y, double r2, double z) const;
-  int start_level(double r) const;
-  bool block_range(int l, double x, double y, double r, int& i0, int& i1, int& j0, int& j1) const;
 
   double cell_ = 1, x0_ = 0, y0_ = 0;
   int nx_ = 0, ny_ = 0;

@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -16,9 +17,16 @@
 namespace drom::geometry {
 
 double typical_spacing(std::span<const Eigen::Vector3d> points, double* p90) {
+  if (points.size() < 9) {
+    if (p90) *p90 = 0;
+    return 0;
+  }
+  return typical_spacing(CloudKdTree(points), points, p90);
+}
+
+double typical_spacing(const CloudKdTree& tree, std::span<const Eigen::Vector3d> points, double* p90) {
   if (p90) *p90 = 0;
   if (points.size() < 9) return 0;
-  const CloudKdTree tree(points);
   std::mt19937 rng(45);
   const std::size_t n = points.size(), m = std::min<std::size_t>(n, 4000);
   std::vector<double> d8;
@@ -48,7 +56,7 @@ CloudCells thin_cloud(std::span<const Eigen::Vector3d> points, double cell, doub
   };
   std::vector<std::pair<std::uint64_t, int>> order(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) order[i] = {key(points[i]), static_cast<int>(i)};
-  std::sort(order.begin(), order.end());
+  tbb::parallel_sort(order.begin(), order.end());
   for (std::size_t i = 0; i < order.size();) {
     std::size_t j = i;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -73,11 +81,17 @@ std::vector<Eigen::Vector3d> thinned(std::span<const Eigen::Vector3d> points, do
   std::vector<std::pair<std::uint64_t, std::size_t>> keys(points.size());
   const auto index = [&](double v) { return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v / cell)) + (std::int64_t{1} << 20)); };
   for (std::size_t i = 0; i < points.size(); ++i) keys[i] = {(index(points[i].x()) << 42) | (index(points[i].y()) << 21) | index(points[i].z()), i};
-  std::sort(keys.begin(), keys.end());
+  tbb::parallel_sort(keys.begin(), keys.end());
   std::vector<Eigen::Vector3d> out;
   for (std::size_t i = 0; i < keys.size(); ++i)
     if (i == 0 || keys[i].first != keys[i - 1].first) out.push_back(points[keys[i].second]);
   return out;
+}
+
+ScanSurvey::ScanSurvey(std::span<const Eigen::Vector3d> points) : tree(points) {
+  spacing = typical_spacing(tree, points, &spacing_p90);
+  const double cell = std::max(0.2, 1.5 * spacing);
+  cells = thin_cloud(points, cell, 2.5 * cell);
 }
 
 LocalPlane fit_plane(std::span<const Eigen::Vector3d> points) {

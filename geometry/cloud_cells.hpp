@@ -2,6 +2,8 @@
 // A scan thinned to one centroid per cubic cell, each knowing its points and its neighbouring
 // centroids: the scale at which the shape of a scan's surface (its rim, its creases) is read, above
 // its spacing and its noise. Shared by cloud_rim.hpp and cloud_creases.hpp.
+#include "geometry/cloud_kdtree.hpp"
+
 #include <Eigen/Core>
 
 #include <span>
@@ -13,6 +15,7 @@ namespace drom::geometry {
 // with a fixed seed, over sqrt(8 / pi) (on a surface sampled at density 1/s^2, a disc of radius d
 // holds pi d^2 / s^2 points); `p90`, when given, receives the 90th percentile the same way.
 double typical_spacing(std::span<const Eigen::Vector3d> points, double* p90 = nullptr);
+double typical_spacing(const CloudKdTree& tree, std::span<const Eigen::Vector3d> points, double* p90 = nullptr);
 
 struct CloudCells {
   double cell = 0;
@@ -22,6 +25,16 @@ struct CloudCells {
 };
 
 CloudCells thin_cloud(std::span<const Eigen::Vector3d> points, double cell, double radius);
+
+// What a scan's analyses (its noise, rim, creases and holes) share, made once: a k-d tree of its
+// points, its typical spacing and 90th percentile, and its cells (1.5 spacings, at least 0.2 mm;
+// neighbours within 2.5 cells).
+struct ScanSurvey {
+  explicit ScanSurvey(std::span<const Eigen::Vector3d> points);
+  CloudKdTree tree;
+  double spacing = 0, spacing_p90 = 0;
+  CloudCells cells;
+};
 
 // One point per cube of `cell` mm (the first, in order): a cloud thinned for tests that need its
 // shape, not its every point.

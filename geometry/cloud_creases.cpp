@@ -12,12 +12,15 @@
 namespace drom::geometry {
 
 Creases crease_points(std::span<const Eigen::Vector3d> points, double noise, double spacing) {
+  if (points.size() < 30 || !(spacing > 0)) return {};
+  return crease_points(points, ScanSurvey(points), noise, spacing);
+}
+
+Creases crease_points(std::span<const Eigen::Vector3d> points, const ScanSurvey& survey, double noise, double spacing) {
   Creases out;
-  if (points.size() < 30 || !(spacing > 0)) return out;
-  const double s = typical_spacing(points);
-  if (!(s > 0)) return out;
-  out.cell = std::max(0.2, 1.5 * s);
-  const CloudCells cells = thin_cloud(points, out.cell, 2.5 * out.cell);
+  if (points.size() < 30 || !(spacing > 0) || !(survey.spacing > 0)) return out;
+  const CloudCells& cells = survey.cells;
+  out.cell = cells.cell;
   const double flat = 3 * noise + 0.005;  // what a flat face may leave, mm
   std::vector<std::vector<Eigen::Vector3d>> found(cells.centroids.size());
   tbb::parallel_for(std::size_t(0), cells.centroids.size(), [&](std::size_t i) {

@@ -14,6 +14,8 @@
 // a cell beyond.
 // Points on a concave crease (the foot of a wall) lie on the surface the ball cannot reach anyway:
 // they change nothing. A cloud with no crease gets no point.
+#include "geometry/cloud_cells.hpp"
+
 #include <Eigen/Core>
 
 #include <span>
@@ -30,5 +32,7 @@ struct Creases {
 
 // `noise`: the scan's noise (geometry/cloud_noise.hpp); `spacing`: between the added points (mm).
 Creases crease_points(std::span<const Eigen::Vector3d> points, double noise, double spacing);
+// On the cells of a survey already made (geometry/cloud_cells.hpp).
+Creases crease_points(std::span<const Eigen::Vector3d> points, const ScanSurvey& survey, double noise, double spacing);
 
 }  // namespace drom::geometry

@@ -14,6 +14,8 @@
 // quadric. Afterwards no spot of the scanned surface is farther than about `hole` from a point.
 // Points added are never a gouge: at worst, where the quadric bulges over a crease, the tool stays a
 // little higher.
+#include "geometry/cloud_cells.hpp"
+
 #include <Eigen/Core>
 
 #include <span>
@@ -25,16 +27,19 @@ struct FilledHoles {
   std::vector<Eigen::Vector3d> points;  // added
   std::vector<int> source;              // per added point: the scan's point whose neighbourhood made it
   double spacing = 0, spacing_p90 = 0;  // the scan's typical spacing and its 90th percentile (mm)
-  bool needed = false;                  // false: the scan is dense enough, nothing was looked at
+  bool needed = false;                  // false: the scan is dense enough (by its spacing, or a sample), not gone through whole
 };
 
 // `hole`: the widest gap radius allowed (mm). Scans whose 90th-percentile spacing is under hole / 1.5
-// are left as they are without looking further. `noise` (the scan's, geometry/cloud_noise.hpp): the
+// are left as they are without looking further, and so are those where 4 000 points drawn with a fixed
+// seed border no hole (a hole touching fewer than about one point in 4 000 can escape that look). `noise` (the scan's, geometry/cloud_noise.hpp): the
 // quadric through noisy points is itself uncertain there by noise sqrt(x^T (A^T A)^-1 x) (about
 // noise sqrt(6 / 16) amid its neighbours, more towards their edge), so each point is put three times
 // that above and below it (one of them inside the part, where it changes nothing): the tool stays on the
 // safe side of what the scan cannot tell. Where the fit would extrapolate far (that ratio above 4), no
 // point is put.
 FilledHoles fill_holes(std::span<const Eigen::Vector3d> points, double hole, double noise = 0);
+// With a survey already made (geometry/cloud_cells.hpp).
+FilledHoles fill_holes(std::span<const Eigen::Vector3d> points, const ScanSurvey& survey, double hole, double noise = 0);
 
 }  // namespace drom::geometry

@@ -12,9 +12,13 @@
 namespace drom::geometry {
 
 double scan_noise(std::span<const Eigen::Vector3d> points, int samples) {
+  if (points.size() < 25) return 0;
+  return scan_noise(points, CloudKdTree(points), samples);
+}
+
+double scan_noise(std::span<const Eigen::Vector3d> points, const CloudKdTree& tree, int samples) {
   constexpr int k = 24;
   if (points.size() < static_cast<std::size_t>(k) + 1) return 0;
-  const CloudKdTree tree(points);
   std::mt19937 rng(2045);
   std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
   const std::size_t m = std::min<std::size_t>(points.size(), static_cast<std::size_t>(samples));

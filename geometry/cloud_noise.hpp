@@ -5,6 +5,8 @@
 // the curvature). The estimate is the median, over up to 2 000 points drawn with a fixed seed, of each
 // fit's residual standard deviation (corrected for the six fitted coefficients). Edges and creases
 // fit badly, but they are a minority: the median is the noise of the smooth faces.
+#include "geometry/cloud_kdtree.hpp"
+
 #include <Eigen/Core>
 
 #include <span>
@@ -13,5 +15,7 @@ namespace drom::geometry {
 
 // The scan's noise standard deviation (mm); 0 for a cloud of fewer than 25 points.
 double scan_noise(std::span<const Eigen::Vector3d> points, int samples = 2000);
+// With the scan's k-d tree already built.
+double scan_noise(std::span<const Eigen::Vector3d> points, const CloudKdTree& tree, int samples = 2000);
 
 }  // namespace drom::geometry

@@ -14,12 +14,24 @@
 
 namespace drom::geometry {
 
+CloudRim find_rim(std::span<const Eigen::Vector3d> points, double spacing, const CloudCells& cells, double noise, double step, double margin, double gap_degrees);
+
 CloudRim find_rim(std::span<const Eigen::Vector3d> points, double noise, double step, double margin, double cell, double gap_degrees) {
+  if (points.size() < 4) return {};
+  if (cell <= 0) return find_rim(points, ScanSurvey(points), noise, step, margin, gap_degrees);
+  const double spacing = typical_spacing(points);
+  return find_rim(points, spacing, thin_cloud(points, cell, 2.5 * cell), noise, step, margin, gap_degrees);
+}
+
+CloudRim find_rim(std::span<const Eigen::Vector3d> points, const ScanSurvey& survey, double noise, double step, double margin, double gap_degrees) {
+  if (points.size() < 4) return {};
+  return find_rim(points, survey.spacing, survey.cells, noise, step, margin, gap_degrees);
+}
+
+CloudRim find_rim(std::span<const Eigen::Vector3d> points, double spacing, const CloudCells& cells, double noise, double step, double margin, double gap_degrees) {
   CloudRim rim;
-  if (points.size() < 4) return rim;
-  rim.spacing = typical_spacing(points);
-  rim.cell = cell > 0 ? cell : std::max(0.2, 1.5 * rim.spacing);
-  const CloudCells cells = thin_cloud(points, rim.cell, 2.5 * rim.cell);
+  rim.spacing = spacing;
+  rim.cell = cells.cell;
   const auto& c = cells.centroids;
   const double gap = gap_degrees * std::numbers::pi / 180;
   const std::size_t n = c.size();

@@ -25,6 +25,8 @@
 // along the rim between neighbouring rim points, go down to the base's top, every `spacing` mm: a
 // wall of points dense enough that a ball of radius r dips between them by at most
 // r - sqrt(r^2 - spacing^2 / 2). The strip between the rim and the side is filled the same way.
+#include "geometry/cloud_cells.hpp"
+
 #include <Eigen/Core>
 
 #include <span>
@@ -52,6 +54,8 @@ struct CloudRim {
 // `margin`: added to that uncertainty (the strip's points are put that much farther above and below:
 // what the sheet may curve between the rim points the strip is drawn from).
 CloudRim find_rim(std::span<const Eigen::Vector3d> points, double noise, double step, double margin = 0, double cell = 0, double gap_degrees = 120);
+// On the cells of a survey already made (geometry/cloud_cells.hpp).
+CloudRim find_rim(std::span<const Eigen::Vector3d> points, const ScanSurvey& survey, double noise, double step, double margin = 0, double gap_degrees = 120);
 
 // The side below the rim down to z = base_top (nothing where the rim is at or below it), and the
 // strips out to it; with `depth` > 0, down to `depth` below each point of the rim only (and never

@@ -33,8 +33,9 @@ int copy_command(const CommandOptions& options) {
   const auto& scan = s["scan"];
   std::printf("  scan                  %zu points read: %zu not finite and %zu far outliers dropped\n", scan["points_read"].get<std::size_t>(),
               scan["dropped_not_finite"].get<std::size_t>(), scan["dropped_far_outliers"].get<std::size_t>());
-  std::printf("  packets               %zu (%s): %.1f %% of the points with a normal covered (%.1f %% of all points kept), %d overlap points, %d re-attached, %d unmachinable\n",
-              g["packets"].get<std::size_t>(), g["method"].get<std::string>().c_str(), 100 * scan["coverage_of_points_with_normal"].get<double>(),
+  std::printf("  packets               %zu (%s; decided by %s, largest tilt %.0f deg): %.1f %% of the points with a normal covered (%.1f %% of all points kept), %d overlap points, %d re-attached, %d unmachinable\n",
+              g["packets"].get<std::size_t>(), g["method"].get<std::string>().c_str(), g["decided_by"].get<std::string>().c_str(), g["largest_tilt_deg"].get<double>(),
+              100 * scan["coverage_of_points_with_normal"].get<double>(),
               100 * scan["coverage_of_points_kept"].get<double>(), g["overlap_points"].get<int>(), g["reattached"].get<int>(), g["unmachinable"].get<int>());
   for (std::size_t k = 0; k < s["packets"].size(); ++k) {
     const auto& p = s["packets"][k];
@@ -44,6 +45,12 @@ int copy_command(const CommandOptions& options) {
       if (p.contains(op))
         std::printf("    %-9s           %zu points, %.0f mm cut, %.1f s on the machine; deepest into the cloud %.4f mm\n", op, p[op]["path_points"].get<std::size_t>(),
                     p[op]["cutting_length_mm"].get<double>(), p[op]["cycle_time_s"].get<double>(), p[op]["check"]["deepest_mm"].get<double>());
+    if (p.contains("finishing") && p["finishing"].contains("floor")) {
+      const auto& f = p["finishing"]["floor"];
+      std::printf("    finishing floor     %.0f mm2 of surface: passes at least %.0f mm long (these are %.2fx that), %.1f s (the cycle is %.2fx that)\n",
+                  f["area_mm2"].get<double>(), f["length_mm"].get<double>(), f["cutting_length_over_floor"].get<double>(), f["time_s"].get<double>(),
+                  f["cycle_over_floor"].get<double>());
+    }
     for (const char* op : {"roughing", "finishing"})
       if (p.contains(op) && p[op].contains("program_verdict")) {
         const auto& v = p[op]["program_verdict"];

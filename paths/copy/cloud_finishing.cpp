@@ -362,10 +362,11 @@ double CloudFinishingPlanner::round_the_corner_at(const Node& a, const Node& n) 
   // A move the chord tests could not split further may still dip (issue 45: 951 such moves on a cap,
   // the worst 4.99 mm): it is held to Tu like a steep one, never fed straight through the dip.
   const bool shortest = run <= shortest_ * (1 + 1e-9);
-  const int samples = steep || shortest ? 16 : 4;
-  // Elsewhere, well beyond the tolerance only: a resolved move may stray by about Tu between the
-  // points the chord test looked at.
-  const double allowance = steep || shortest ? 0.7 * s_.chord_tolerance : 4 * s_.chord_tolerance;
+  // Any other move the chord tests resolved: it goes straight (the whole-tool path check judges every
+  // posted move afterwards, and refuses the program if one went too deep).
+  if (!steep && !shortest) return std::numeric_limits<double>::quiet_NaN();
+  const int samples = 16;
+  const double allowance = 0.7 * s_.chord_tolerance;
   for (int i = 1; i < samples; ++i) {
     const double t = static_cast<double>(i) / samples;
     const double d = drop_assembly(bins_, a.x + t * (n.x - a.x), a.y + t * (n.y - a.y), s_.tool).tip;

@@ -1,6 +1,6 @@
 #pragma once
 // Grouping a cloud into packets, one per fixed orientation (Makki 2009 §3-4, Algorithm 4), chosen as
-// a CAM programmer would choose them (issue 45; docs/clouds.md §5 states the rule and a case where
+// a CAM programmer would choose them (issue 45; docs/clouds.md §6.1 states the rule and a case where
 // each criterion decides):
 //   1. coverage: a set of directions is admissible when its columns of the visibility matrix cover at
 //      least pa of the machinable points (those some direction the machine reaches sees at all);

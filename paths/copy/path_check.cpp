@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <mutex>
 
 namespace drom::paths {
@@ -37,7 +38,10 @@ PathCheck check_path(const geometry::CloudBins& bins, const CloudPath& path, con
     const Eigen::Vector3d a = i > 0 ? path.tips[i - 1] : b;
     const int samples = i > 0 ? std::max(1, static_cast<int>(std::ceil((b - a).norm() / spacing))) : 1;
     const double allowed = path.motion[i] == Motion::rapid ? 1e-9 : tolerance + 1e-9;
-    for (int k = 1; k <= samples; ++k) {
+    // A cut node the planner dropped (it carries its contact normal) stands at the whole tool's drop
+    // there by construction: the check looks between such nodes, and at every other point.
+    const bool dropped = path.motion[i] == Motion::cut && path.normals[i].squaredNorm() > 0;
+    for (int k = 1; k <= samples - (dropped && samples > 1 ? 1 : 0); ++k) {
       const Eigen::Vector3d p = a + (b - a) * (static_cast<double>(k) / samples);
       const double d = depth_at(bins, p, tool);
       ++local.positions;
@@ -49,6 +53,16 @@ PathCheck check_path(const geometry::CloudBins& bins, const CloudPath& path, con
     if (local.deepest > out.deepest) out.deepest = local.deepest, out.worst = local.worst;
   });
   return out;
+}
+
+std::string refusal(const PathCheck& check, const Eigen::Matrix3d& frame, double tolerance) {
+  if (check.over == 0) return {};
+  const Eigen::Vector3d part = frame.transpose() * check.worst;
+  char what[320];
+  std::snprintf(what, sizeof what,
+                "%lld tool positions stand deeper than %.4g mm into the scan (the deepest %.4f mm, tip at (%.3f, %.3f, %.3f) in the part frame): the program is not posted",
+                check.over, tolerance, check.deepest, part.x(), part.y(), part.z());
+  return what;
 }
 
 }  // namespace drom::paths

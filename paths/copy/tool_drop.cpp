@@ -61,39 +61,60 @@ Drop drop_brute_force(std::span<const Eigen::Vector3d> points, double x, double 
 }
 
 Drop drop_tool(const geometry::CloudBins& bins, double x, double y, const Tool& cutter) {
-  int i0, i1, j0, j1;
   Best best;
-  if (!bins.cell_range(x, y, cutter.radius, i0, i1, j0, j1)) return {};
-  const double r2 = cutter.radius * cutter.radius;
-  // Each cell's best possible value: its highest point, lowered by the profile at the cell's nearest
-  // distance (h grows with rho). Cells in decreasing order of that bound; stop at the first that
-  // cannot beat (or tie) the best found.
-  struct Candidate {
+  if (bins.empty()) return {};
+  const double r = cutter.radius, r2 = r * r;
+  const geometry::BinnedPoint* contact = nullptr;
+  // Best first down the bins' pyramid: a block's best possible value is its highest point lowered by
+  // the profile at the block's nearest distance (h grows with rho). A block that cannot beat (or tie)
+  // the best found is not opened; children are opened highest bound first, so the best found rises
+  // quickly and most of the disk is never read.
+  struct Block {
     double bound;
-    int i, j;
+    int l, i, j;
   };
-  thread_local std::vector<Candidate> cells;
-  cells.clear();
+  const auto bound_of = [&](int l, int i, int j, Block& out) {
+    if (i >= bins.level_nx(l) || j >= bins.level_ny(l)) return false;
+    const double top = bins.block_top(l, i, j);
+    if (top == -std::numeric_limits<double>::infinity()) return false;
+    const double d2 = bins.block_distance2(l, i, j, x, y);
+    if (d2 > r2) return false;
+    out = {top - bottom_height(cutter, std::sqrt(d2)), l, i, j};
+    return true;
+  };
+  const auto beaten = [&](double bound) { return bound < best.value - 1e-12 * (1 + std::abs(best.value)); };
+  const auto open = [&](const Block& b, const auto& self) -> void {
+    if (beaten(b.bound)) return;
+    if (b.l == 0) {
+      for (const auto& p : bins.cell_points(b.i, b.j)) {
+        const double dx = p.x - x, dy = p.y - y, rho2 = dx * dx + dy * dy;
+        if (rho2 > r2) continue;
+        const int before = best.index;
+        best.offer(lifted_height(cutter, rho2, p.z), p.index);
+        if (best.index != before) contact = &p;
+      }
+      return;
+    }
+    Block children[4];
+    int n = 0;
+    for (int c = 0; c < 4; ++c)
+      if (bound_of(b.l - 1, 2 * b.i + (c & 1), 2 * b.j + (c >> 1), children[n])) ++n;
+    for (int c = 1; c < n; ++c)  // insertion sort, highest bound first (at most four)
+      for (int k = c; k > 0 && children[k].bound > children[k - 1].bound; --k) std::swap(children[k], children[k - 1]);
+    for (int c = 0; c < n; ++c) self(children[c], self);
+  };
+  const int l = bins.start_level(r);
+  int i0, i1, j0, j1;
+  if (!bins.block_range(l, x, y, r, i0, i1, j0, j1)) return {};
+  thread_local std::vector<Block> blocks;
+  blocks.clear();
   for (int j = j0; j <= j1; ++j)
     for (int i = i0; i <= i1; ++i) {
-      const double top = bins.cell_max_z(i, j);
-      if (top == -std::numeric_limits<double>::infinity()) continue;
-      const double d2 = bins.cell_distance2(i, j, x, y);
-      if (d2 > r2) continue;
-      cells.push_back({top - bottom_height(cutter, std::sqrt(d2)), i, j});
+      Block b;
+      if (bound_of(l, i, j, b)) blocks.push_back(b);
     }
-  std::sort(cells.begin(), cells.end(), [](const Candidate& a, const Candidate& b) { return a.bound > b.bound; });
-  const geometry::BinnedPoint* contact = nullptr;
-  for (const auto& c : cells) {
-    if (c.bound < best.value - 1e-12 * (1 + std::abs(best.value))) break;
-    for (const auto& p : bins.cell_points(c.i, c.j)) {
-      const double dx = p.x - x, dy = p.y - y, rho2 = dx * dx + dy * dy;
-      if (rho2 > r2) continue;
-      const int before = best.index;
-      best.offer(lifted_height(cutter, rho2, p.z), p.index);
-      if (best.index != before) contact = &p;
-    }
-  }
+  std::sort(blocks.begin(), blocks.end(), [](const Block& a, const Block& o) { return a.bound > o.bound; });
+  for (const Block& b : blocks) open(b, open);
   return finish(cutter, x, y, best, contact ? Eigen::Vector3d(contact->x, contact->y, contact->z) : Eigen::Vector3d::Zero());
 }
 

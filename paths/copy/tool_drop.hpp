@@ -8,8 +8,8 @@
 // a gap: reported as such (contact = false), never a tool fallen to some floor.
 //
 // Three ways to the same number, bit for bit (tests/paths/copy/tool_drop_test.cpp): brute force over every
-// point (the reference), the 2D bin grid (cells visited highest first, stopped when no cell can do
-// better) and the k-d tree over XY (bench/clouds_bench.cpp times them).
+// point (the reference), the 2D bin grid (its pyramid of maxima searched best first: a block that
+// cannot do better is not opened) and the k-d tree over XY (bench/clouds_bench.cpp times them).
 #include "geometry/cloud_bins.hpp"
 #include "geometry/cloud_kdtree.hpp"
 #include "paths/cutter/tool_assembly.hpp"

@@ -118,8 +118,11 @@ TEST(OutputFolder, KilledCopyRerunsAndFewerPacketsLeaveNoStaleFile) {
   const fs::path cloud = root() / "dome.ply";
   std::ofstream(cloud) << dome_ply();
   const fs::path out = root() / "copy";
+  // The seed's hollow cone [10, 80] and every machinable point covered: the vertical misses the dome's
+  // top, and two packets are needed.
   const std::string common = "copy " + cloud.string() + " --tool ball:6 --machine ucp710_like --set normals.from_file=true --set visibility.theta_step=10 " +
-                             "--set finishing.step=1 --set finishing.scallop=0.05 --set roughing.depth=5 --set roughing.longitudinal_step=4 --quiet --out " + out.string();
+                             "--set visibility.cone=[10,80] --set packets.coverage=1 --set finishing.step=1 --set finishing.scallop=0.05 --set roughing.depth=5 " +
+                             "--set roughing.longitudinal_step=4 --quiet --out " + out.string();
   ASSERT_EQ(wait_drom(spawn_drom(words(common), root() / "first.log")), 0);
   expect_one_complete_run(out);
   ASSERT_TRUE(fs::exists(out / "packet_2")) << "the dome needs two packets or more";

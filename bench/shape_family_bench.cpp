@@ -1,0 +1,99 @@
+// Issue 45's benchmark, as JSON: drom copy on the family of generated shapes (tests/paths/copy/
+// shape_family.hpp: caps, domes, saddles, steps, undercuts, holes, ridges; noise 0-0.1 mm, spacing
+// 0.1-1 mm, stray points), the default settings as the tests use them, each shape's copy timed as a
+// whole (wall and CPU), and its posted CL files judged by the independent checker
+// (tests/paths/copy/independent_checker.hpp): the deepest any move takes the whole tool into the scan
+// and into the true solid (away from the scan's open edge, and near it), the coverage of the
+// machinable true points, the scallop. The tests run one shape per kind; this runs as many as asked.
+//   build/bench/shape_family_bench [shapes per kind, default 5] [seed, default 9191]
+#include "paths/copy/copy_run.hpp"
+#include "support/resources.hpp"
+#include "tests/paths/copy/independent_checker.hpp"
+#include "tests/paths/copy/shape_family.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using namespace drom;
+using namespace drom::tests;
+
+int main(int argc, char** argv) {
+  const int per_kind = argc > 1 ? std::atoi(argv[1]) : 5;
+  const unsigned seed = argc > 2 ? static_cast<unsigned>(std::atoi(argv[2])) : 9191u;
+  const fs::path scratch = fs::temp_directory_path() / ("drom_shape_family_bench_" + std::to_string(::getpid()));
+  fs::create_directories(scratch);
+  const auto family = family::make_family(per_kind, seed, 60000);
+  checker::ToolSpec ball;
+  ball.kind = checker::ToolSpec::Kind::ball, ball.radius = 3, ball.corner = 3, ball.gauge_length = 40, ball.holder_radius = 26.5;
+  constexpr double kTu = 0.01;
+  std::printf("{\n  \"per_kind\": %d,\n  \"seed\": %u,\n  \"shapes\": [\n", per_kind, seed);
+  int met = 0;
+  for (std::size_t k = 0; k < family.size(); ++k) {
+    const family::Shape& shape = family[k];
+    const fs::path dir = scratch / std::to_string(k);
+    fs::create_directories(dir);
+    {
+      std::ofstream out(dir / "scan.ply");
+      out.precision(9);
+      out << "ply\nformat ascii 1.0\nelement vertex " << shape.scan.points.size() << "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
+      for (const auto& p : shape.scan.points) out << p.x() << " " << p.y() << " " << p.z() << "\n";
+    }
+    paths::CopyRunOptions o;
+    o.cloud = dir / "scan.ply", o.out = dir / "copy", o.quiet = true, o.overrides = {"stock.base_top=0"};
+    const auto start = std::chrono::steady_clock::now();
+    const double cpu0 = process_cpu_seconds();
+    const nlohmann::json s = paths::run_copy(o);
+    const double wall = seconds_since(start), cpu = process_cpu_seconds() - cpu0;
+    // The checker, as the test runs it.
+    std::vector<Eigen::Vector3d> scan(shape.scan.points.begin(), shape.scan.points.end() - static_cast<long>(shape.outliers));
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+    for (const auto& p : scan) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    std::vector<Eigen::Vector3d> solid = shape.scanned_truth.points;
+    solid.insert(solid.end(), shape.hidden_truth.points.begin(), shape.hidden_truth.points.end());
+    const auto base = checker::base_points(lo.head<2>().array() - 5, hi.head<2>().array() + 5, 0, -5, 0.25);
+    solid.insert(solid.end(), base.begin(), base.end());
+    const double edge_band = 1.5 * shape.spacing, edge_allowance = shape.spacing * shape.spacing / 24 + 3 * shape.noise;
+    double deepest_cloud = 0, deepest_truth = 0, deepest_edge = 0, largest_tilt = 0;
+    long long over = 0;
+    int refused = 0;  // packets whose program drom did not post (its own check found a move over Tu)
+    std::vector<checker::ClFile> finishing;
+    const int packets = s["grouping"]["packets"].get<int>();
+    for (int p = 0; p < packets; ++p) {
+      const fs::path cl = o.out / ("packet_" + std::to_string(p + 1)) / "finishing_cl.csv";
+      largest_tilt = std::max(largest_tilt, s["packets"][static_cast<std::size_t>(p)]["tilt_deg"].get<double>());
+      for (const char* op : {"finishing", "roughing"})
+        refused += s["packets"][static_cast<std::size_t>(p)].contains(op) && s["packets"][static_cast<std::size_t>(p)][op].contains("refused");
+      if (!fs::exists(cl)) continue;
+      finishing.push_back(checker::read_cl_csv(cl));
+      const checker::PathResult r = checker::check_path(finishing.back(), ball, scan, solid, kTu, shape.open_edge, edge_band, kTu + edge_allowance);
+      deepest_cloud = std::max(deepest_cloud, r.deepest_cloud), deepest_truth = std::max(deepest_truth, r.deepest_truth);
+      deepest_edge = std::max(deepest_edge, r.deepest_at_edge);
+      over += r.over_cloud + r.over_truth + r.over_edge;
+    }
+    checker::CoverageSettings c;
+    c.tool = ball;
+    c.reached = 0.005 + kTu + 6 * shape.noise + shape.spacing * shape.spacing / 6 + 0.05;
+    c.unsure = shape.hidden_truth.points, c.unsure_radius = 3.5 * shape.spacing;
+    const checker::CoverageResult cov = checker::check_coverage(finishing, shape.scanned_truth.points, shape.scanned_truth.normals, solid, c);
+    const bool ok = over == 0 && refused == 0 && deepest_truth <= kTu + 1e-6 && deepest_edge <= kTu + edge_allowance + 1e-6 && cov.coverage >= 0.99;
+    met += ok;
+    std::printf("    {\"name\": \"%s\", \"scan_points\": %zu, \"packets\": %d, \"largest_tilt_deg\": %.0f, \"wall_s\": %.2f, \"cpu_s\": %.2f, "
+                "\"deepest_into_scan_mm\": %.4f, \"deepest_into_truth_mm\": %.4f, \"deepest_at_open_edge_mm\": %.4f, \"moves_over\": %lld, \"refused\": %d, "
+                "\"coverage\": %.4f, \"scallop_mm\": %.4f, \"met\": %s}%s\n",
+                shape.name.c_str(), shape.scan.points.size() - shape.outliers, packets, largest_tilt, wall, cpu, deepest_cloud, deepest_truth, deepest_edge, over, refused,
+                cov.coverage, cov.scallop, ok ? "true" : "false", k + 1 < family.size() ? "," : "");
+    std::fflush(stdout);
+    fs::remove_all(dir);
+  }
+  std::printf("  ],\n  \"met\": %d,\n  \"shapes_total\": %zu\n}\n", met, family.size());
+  fs::remove_all(scratch);
+  return 0;
+}
