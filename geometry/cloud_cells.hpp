@@ -55,13 +55,19 @@ double fit_quadric(std::span<const Eigen::Vector3d> points, const LocalPlane& fr
 // Two planes meeting on a line: a sharp crease. Found by splitting the points along eight directions
 // in their plane at five offsets (the split that leaves the least residual), then each point given to
 // the plane it is nearer and both refitted. Found when both are flat to `flat` (residual standard
-// deviation, mm), flatter than half the quadric's residual `smooth`, and 15° or more apart.
+// deviation, mm), flatter than half the quadric's residual `smooth`, and 15° or more apart; then
+// each refitted without the points near both, which noise would give to either.
 struct TwoPlanes {
   bool found = false;
   Eigen::Vector3d normal_a = Eigen::Vector3d::UnitZ(), point_a = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal_b = Eigen::Vector3d::UnitZ(), point_b = Eigen::Vector3d::Zero();
   Eigen::Vector3d line_point = Eigen::Vector3d::Zero(), line_direction = Eigen::Vector3d::UnitX();  // where they meet
   double residual = 0;
+  LocalPlane plane_a, plane_b;  // the final fits, and the points each took
+  std::size_t count_a = 0, count_b = 0;
+  // mm: one standard deviation of the line's position at x (on it) from the noise: each plane's height
+  // there (its offset and its tilt, by least squares' leverage) over the sine of the planes' angle.
+  double line_uncertainty(const Eigen::Vector3d& x) const;
 };
 TwoPlanes fit_two_planes(std::span<const Eigen::Vector3d> points, const LocalPlane& frame, double reach, double flat, double smooth);
 
