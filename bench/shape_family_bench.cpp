@@ -6,6 +6,7 @@
 // and into the true solid (away from the scan's open edge, and near it), the coverage of the
 // machinable true points, the scallop. The tests run one shape per kind; this runs as many as asked.
 //   build/bench/shape_family_bench [shapes per kind, default 5] [seed, default 9191] [kind: only those]
+//   (DROM_BENCH_KEEP=1 keeps every shape's scan.ply and copy folder under the temporary directory)
 // A shape meets the checks as the tests hold them (tests/paths/copy/shape_family_test.cpp): no move
 // deeper than Tu into the scan, none into the true solid, none at the open edge past its allowance,
 // 99 % of the machinable true points reached, no packet refused by drom's own check.
@@ -33,6 +34,7 @@ int main(int argc, char** argv) {
   const int per_kind = argc > 1 ? std::atoi(argv[1]) : 5;
   const unsigned seed = argc > 2 ? static_cast<unsigned>(std::atoi(argv[2])) : 9191u;
   const std::string only = argc > 3 ? argv[3] : "";
+  const bool keep = std::getenv("DROM_BENCH_KEEP") != nullptr;  // keep each shape's scan and copy to look at
   const fs::path scratch = fs::temp_directory_path() / ("drom_shape_family_bench_" + std::to_string(::getpid()));
   fs::create_directories(scratch);
   const auto family = family::make_family(per_kind, seed, 60000);
@@ -100,9 +102,10 @@ int main(int argc, char** argv) {
                 separator, shape.name.c_str(), shape.scan.points.size() - shape.outliers, packets, largest_tilt, wall, cpu, deepest_cloud, deepest_truth, worst_truth.x(), worst_truth.y(), worst_truth.z(), deepest_edge, over, refused,
                 cov.coverage, cov.scallop, ok ? "true" : "false");
     std::fflush(stdout);
-    fs::remove_all(dir);
+    if (!keep) fs::remove_all(dir);
   }
   std::printf("\n  ],\n  \"met\": %d,\n  \"shapes_run\": %d\n}\n", met, run);
-  fs::remove_all(scratch);
+  if (!keep) fs::remove_all(scratch);
+  else std::fprintf(stderr, "shape_family_bench: the scans and copies are kept in %s\n", scratch.c_str());
   return 0;
 }
