@@ -52,6 +52,10 @@ LocalPlane fit_plane(std::span<const Eigen::Vector3d> points);
 // fitted in `frame`, and its coefficients: what a smooth surface leaves.
 double fit_quadric(std::span<const Eigen::Vector3d> points, const LocalPlane& frame, Eigen::Matrix<double, 6, 1>* coefficients = nullptr);
 
+// What a flat face of a scan with this noise (standard deviation, mm) may leave about its plane: three
+// deviations and 5 µm. The threshold the rim, the holes and the creases read a scan's shape by.
+inline double flat_face_residual(double noise) { return 3 * noise + 0.005; }
+
 // Two planes meeting on a line: a sharp crease. Found by splitting the points along eight directions
 // in their plane at five offsets (the split that leaves the least residual), then each point given to
 // the plane it is nearer and both refitted. Found when both are flat to `flat` (residual standard
@@ -75,7 +79,7 @@ TwoPlanes fit_two_planes(std::span<const Eigen::Vector3d> points, const LocalPla
 // none: a quadric over their plane; where a sharp crease runs through them, two planes, each on its
 // side of their line; where a crease lies at the neighbourhood's edge (a few points across, too few
 // for two planes), the quadric of the face of its `own` first points (the nearest to where it was
-// taken). `flat`: what a smooth face may leave (three noise deviations and 5 µm).
+// taken). `flat`: what a smooth face may leave (flat_face_residual).
 class LocalSurface {
  public:
   enum class Kind { quadric, crease, face, none };

@@ -21,7 +21,7 @@ Creases crease_points(std::span<const Eigen::Vector3d> points, const ScanSurvey&
   if (points.size() < 30 || !(spacing > 0) || !(survey.spacing > 0)) return out;
   const CloudCells& cells = survey.cells;
   out.cell = cells.cell;
-  const double flat = 3 * noise + 0.005;  // what a flat face may leave, mm
+  const double flat = flat_face_residual(noise);
   std::vector<std::vector<Eigen::Vector3d>> found(cells.centroids.size());
   tbb::parallel_for(std::size_t(0), cells.centroids.size(), [&](std::size_t i) {
     // The cell's points and its neighbours', at most about 400.

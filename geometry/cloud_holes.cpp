@@ -26,7 +26,7 @@ FilledHoles fill_holes(std::span<const Eigen::Vector3d> points, const ScanSurvey
   if (out.spacing_p90 < hole / 1.5) return out;
   const CloudKdTree& tree = survey.tree;
   const double step = hole * std::sqrt(2.0);
-  const double flat = 3 * noise + 0.005;  // what a flat face may leave, mm
+  const double flat = flat_face_residual(noise);
   constexpr int k = 16;
   std::vector<std::vector<Eigen::Vector3d>> found(points.size());
   const auto fill = [&](std::size_t i) {

@@ -105,7 +105,7 @@ CloudRim find_rim(std::span<const Eigen::Vector3d> points, double spacing, const
   // edge may be (a lone fragment's, whose outward is unknown, stays where it is).
   rim.edge.resize(rim.points.size());
   rim.strip.resize(rim.points.size());
-  const double flat = 3 * noise + 0.005;
+  const double flat = flat_face_residual(noise);
   tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
     const int r = rim_index[i];
     if (r < 0) return;

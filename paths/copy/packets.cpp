@@ -51,6 +51,28 @@ Score score(const VisibilityMatrix& m, const std::vector<int>& chosen) {
 // Without an admissible set: the most covered, then the fewest overlap points.
 bool more_covered(const Score& a, const Score& b) { return a.cover > b.cover || (a.cover == b.cover && a.overlap < b.overlap); }
 
+// Greedy cover: np directions from `allowed`, each the one that adds the most coverage (then the fewest
+// overlaps) to those already taken; `current` gets the set's score. Fewer when `allowed` runs out.
+std::vector<int> greedy_cover(const VisibilityMatrix& m, const std::vector<int>& allowed, int np, Score& current, long long& combinations) {
+  std::vector<int> trial;
+  for (int k = 0; k < np; ++k) {
+    int pick = -1;
+    Score pick_score;
+    for (const int j : allowed) {
+      if (std::find(trial.begin(), trial.end(), j) != trial.end()) continue;
+      trial.push_back(j);
+      const Score sc = score(m, trial);
+      trial.pop_back();
+      ++combinations;
+      if (pick < 0 || more_covered(sc, pick_score)) pick = j, pick_score = sc;
+    }
+    if (pick < 0) break;
+    trial.push_back(pick);
+    current = pick_score;
+  }
+  return trial;
+}
+
 struct Candidate {
   std::vector<int> set;  // sorted
   Score score;
@@ -189,23 +211,8 @@ class Chooser {
       for (const int j : candidates_)
         if (tilt(j) <= cap + kTiltTie) allowed.push_back(j);
       if (static_cast<int>(allowed.size()) < np) continue;
-      std::vector<int> trial;
       Score current;
-      for (int k = 0; k < np; ++k) {
-        int pick = -1;
-        Score pick_score;
-        for (const int j : allowed) {
-          if (std::find(trial.begin(), trial.end(), j) != trial.end()) continue;
-          trial.push_back(j);
-          const Score sc = score(m_, trial);
-          trial.pop_back();
-          ++out_.combinations;
-          if (pick < 0 || more_covered(sc, pick_score)) pick = j, pick_score = sc;
-        }
-        if (pick < 0) break;
-        trial.push_back(pick);
-        current = pick_score;
-      }
+      std::vector<int> trial = greedy_cover(m_, allowed, np, current, out_.combinations);
       swap_while(trial, current, allowed, [](const Score& a, const Score& b, double, double) { return more_covered(a, b); });
       if (current.cover < target_) continue;
       // Relieve the tilt: a swap that keeps the set admissible and lowers the sum of tilts (or keeps it
@@ -269,23 +276,8 @@ std::vector<int> most_covered(const VisibilityMatrix& m, const std::vector<int>&
   std::vector<int> chosen = {*std::max_element(candidates.begin(), candidates.end(), [&](int a, int b) { return chooser.count(a) < chooser.count(b); })};
   best = score(m, chosen);
   for (int np = 2; np <= max_packets; ++np) {
-    std::vector<int> trial;
     Score current;
-    for (int k = 0; k < np; ++k) {
-      int pick = -1;
-      Score pick_score;
-      for (const int j : candidates) {
-        if (std::find(trial.begin(), trial.end(), j) != trial.end()) continue;
-        trial.push_back(j);
-        const Score sc = score(m, trial);
-        trial.pop_back();
-        ++out.combinations;
-        if (pick < 0 || more_covered(sc, pick_score)) pick = j, pick_score = sc;
-      }
-      if (pick < 0) break;
-      trial.push_back(pick);
-      current = pick_score;
-    }
+    const std::vector<int> trial = greedy_cover(m, candidates, np, current, out.combinations);
     if (more_covered(current, best)) chosen = trial, best = current;
   }
   return chosen;
