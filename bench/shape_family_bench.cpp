@@ -10,10 +10,8 @@
 // A shape meets the checks as the tests hold them (tests/paths/copy/shape_family_test.cpp): no move
 // deeper than Tu into the scan, none into the true solid, none at the open edge past its allowance,
 // 99 % of the machinable true points reached, no packet refused by drom's own check.
-#include "paths/copy/copy_run.hpp"
 #include "support/resources.hpp"
-#include "tests/paths/copy/independent_checker.hpp"
-#include "tests/paths/copy/shape_family.hpp"
+#include "tests/paths/copy/shape_judging.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -21,7 +19,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <numbers>
 #include <string>
 #include <unistd.h>
@@ -38,9 +35,8 @@ int main(int argc, char** argv) {
   const fs::path scratch = fs::temp_directory_path() / ("drom_shape_family_bench_" + std::to_string(::getpid()));
   fs::create_directories(scratch);
   const auto family = family::make_family(per_kind, seed, 60000);
-  checker::ToolSpec ball;
-  ball.kind = checker::ToolSpec::Kind::ball, ball.radius = 3, ball.corner = 3, ball.gauge_length = 40, ball.holder_radius = 26.5;
-  constexpr double kTu = 0.01;
+  const checker::ToolSpec ball = judging::finishing_tool();
+  constexpr double kTu = judging::kTu;
   std::printf("{\n  \"per_kind\": %d,\n  \"seed\": %u,\n  \"shapes\": [\n", per_kind, seed);
   int met = 0, run = 0;
   for (std::size_t k = 0; k < family.size(); ++k) {
@@ -48,27 +44,14 @@ int main(int argc, char** argv) {
     if (!only.empty() && only != family::kind_name(shape.kind)) continue;
     const fs::path dir = scratch / std::to_string(k);
     fs::create_directories(dir);
-    {
-      std::ofstream out(dir / "scan.ply");
-      out.precision(9);
-      out << "ply\nformat ascii 1.0\nelement vertex " << shape.scan.points.size() << "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
-      for (const auto& p : shape.scan.points) out << p.x() << " " << p.y() << " " << p.z() << "\n";
-    }
-    paths::CopyRunOptions o;
-    o.cloud = dir / "scan.ply", o.out = dir / "copy", o.quiet = true, o.overrides = {"stock.base_top=0"};
+    judging::write_scan(dir / "scan.ply", shape);
+    const paths::CopyRunOptions o = judging::copy_options(dir);
     const auto start = std::chrono::steady_clock::now();
     const double cpu0 = process_cpu_seconds();
     const nlohmann::json s = paths::run_copy(o);
     const double wall = seconds_since(start), cpu = process_cpu_seconds() - cpu0;
     // The checker, as the test runs it.
-    std::vector<Eigen::Vector3d> scan(shape.scan.points.begin(), shape.scan.points.end() - static_cast<long>(shape.outliers));
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-    for (const auto& p : scan) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-    std::vector<Eigen::Vector3d> solid = shape.scanned_truth.points;
-    solid.insert(solid.end(), shape.hidden_truth.points.begin(), shape.hidden_truth.points.end());
-    const auto base = checker::base_points(lo.head<2>().array() - 5, hi.head<2>().array() + 5, 0, -5, 0.25);
-    solid.insert(solid.end(), base.begin(), base.end());
-    const double edge_band = 1.5 * shape.spacing, edge_allowance = shape.spacing * shape.spacing / 24 + 3 * shape.noise;
+    const judging::Truth truth = judging::truth_of(shape);
     Eigen::Vector3d worst_truth = Eigen::Vector3d::Zero();
     double deepest_cloud = 0, deepest_truth = 0, deepest_edge = 0, largest_tilt = 0;
     long long over = 0;
@@ -82,18 +65,15 @@ int main(int argc, char** argv) {
         refused += s["packets"][static_cast<std::size_t>(p)].contains(op) && s["packets"][static_cast<std::size_t>(p)][op].contains("refused");
       if (!fs::exists(cl)) continue;
       finishing.push_back(checker::read_cl_csv(cl));
-      const checker::PathResult r = checker::check_path(finishing.back(), ball, scan, solid, kTu, shape.open_edge, edge_band, kTu + edge_allowance);
+      const checker::PathResult r = checker::check_path(finishing.back(), ball, truth.scan, truth.solid, kTu, shape.open_edge, truth.edge_band, kTu + truth.edge_allowance);
       if (r.deepest_truth > deepest_truth) worst_truth = r.worst_truth_part;
       deepest_cloud = std::max(deepest_cloud, r.deepest_cloud), deepest_truth = std::max(deepest_truth, r.deepest_truth);
       deepest_edge = std::max(deepest_edge, r.deepest_at_edge);
       over += r.over_cloud;  // rapids leaving a cut node inherit its depth in the truth: judged by the deepest
     }
-    checker::CoverageSettings c;
-    c.tool = ball;
-    c.reached = 0.005 + kTu + 6 * shape.noise + shape.spacing * shape.spacing / 6 + 0.05;
-    c.unsure = shape.hidden_truth.points, c.unsure_radius = 3.5 * shape.spacing;
-    const checker::CoverageResult cov = checker::check_coverage(finishing, shape.scanned_truth.points, shape.scanned_truth.normals, solid, c);
-    const bool ok = over == 0 && refused == 0 && deepest_truth <= kTu + 1e-6 && deepest_edge <= kTu + edge_allowance + 1e-6 && cov.coverage >= 0.99;
+    const checker::CoverageSettings c = judging::coverage_settings(shape);
+    const checker::CoverageResult cov = checker::check_coverage(finishing, shape.scanned_truth.points, shape.scanned_truth.normals, truth.solid, c);
+    const bool ok = over == 0 && refused == 0 && deepest_truth <= kTu + 1e-6 && deepest_edge <= kTu + truth.edge_allowance + 1e-6 && cov.coverage >= 0.99;
     const char* separator = run > 0 ? ",\n" : "";
     met += ok, ++run;
     std::printf("%s    {\"name\": \"%s\", \"scan_points\": %zu, \"packets\": %d, \"largest_tilt_deg\": %.0f, \"wall_s\": %.2f, \"cpu_s\": %.2f, "

@@ -10,16 +10,13 @@
 //     the checker's own search finds, each within the machine's strokes.
 // One shape per kind runs here; bench/shape_family_bench runs as many as asked and reports which
 // meet the checks (docs/clouds.md §6 lists the family of 35 and what still falls short).
-#include "paths/copy/copy_run.hpp"
-#include "tests/paths/copy/independent_checker.hpp"
-#include "tests/paths/copy/shape_family.hpp"
+#include "tests/paths/copy/shape_judging.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <numbers>
 #include <unistd.h>
 
@@ -28,65 +25,23 @@ using namespace drom::tests;
 
 namespace {
 
-constexpr double kTu = 0.01;  // the default chord tolerance
-
 fs::path scratch(const std::string& name) {
   const fs::path p = fs::temp_directory_path() / ("drom_shape_family_" + std::to_string(::getpid())) / name;
   fs::create_directories(p);
   return p;
 }
 
-// The test's own PLY writer (ascii, points only): the scan as a scanner would hand it over.
-void write_scan(const fs::path& file, const family::Shape& s) {
-  std::ofstream out(file);
-  out << "ply\nformat ascii 1.0\nelement vertex " << s.scan.points.size() << "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
-  char line[128];
-  for (const auto& p : s.scan.points) {
-    std::snprintf(line, sizeof line, "%.6f %.6f %.6f\n", p.x(), p.y(), p.z());
-    out << line;
-  }
-}
-
-checker::ToolSpec finishing_tool() {
-  checker::ToolSpec t;
-  t.kind = checker::ToolSpec::Kind::ball, t.radius = 3, t.corner = 3, t.gauge_length = 40, t.holder_radius = 26.5;
-  return t;
-}
-
-checker::ToolSpec roughing_tool() {
-  checker::ToolSpec t;
-  t.kind = checker::ToolSpec::Kind::flat, t.radius = 5, t.corner = 0, t.gauge_length = 40, t.holder_radius = 26.5;
-  return t;
-}
-
 void check_shape(const family::Shape& shape, bool expect_fewest) {
   SCOPED_TRACE(shape.name);
   std::printf("%s\n", shape.name.c_str());
   const fs::path dir = scratch(std::string(family::kind_name(shape.kind)) + "_" + std::to_string(shape.index));
-  write_scan(dir / "scan.ply", shape);
-  drom::paths::CopyRunOptions o;
-  o.cloud = dir / "scan.ply";
-  o.out = dir / "copy";
-  o.quiet = true;
-  // The stock as the shop states it: its base's top is the table the part stands on, z = 0.
-  o.overrides = {"stock.base_top=0"};
+  judging::write_scan(dir / "scan.ply", shape);
+  const drom::paths::CopyRunOptions o = judging::copy_options(dir);
   const nlohmann::json s = drom::paths::run_copy(o);
 
-  // The truth: every face of the solid, the hidden sides and the stock's base (the cloud's box grown
-  // by the stock margin of 5 mm, as drom's default stock is).
-  std::vector<Eigen::Vector3d> scan(shape.scan.points.begin(), shape.scan.points.end() - static_cast<long>(shape.outliers));
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-  for (const auto& p : scan) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  std::vector<Eigen::Vector3d> solid = shape.scanned_truth.points;
-  solid.insert(solid.end(), shape.hidden_truth.points.begin(), shape.hidden_truth.points.end());
-  const auto base = checker::base_points(lo.head<2>().array() - 5, hi.head<2>().array() + 5, 0, -5, 0.25);
-  solid.insert(solid.end(), base.begin(), base.end());
-
-  // Where the scan ends, the part's true edge lies somewhere in the next gap: the true points within
-  // 1.5 spacings of it are judged apart, held to Tu plus the sag a ball takes over a spacing and three
-  // noise deviations (drom keeps the part's side beyond the rim, paths/copy: cloud_rim); everywhere
-  // else, every face hidden or shown, to Tu.
-  const double edge_band = 1.5 * shape.spacing, edge_allowance = shape.spacing * shape.spacing / (8 * 3) + 3 * shape.noise;
+  const judging::Truth truth = judging::truth_of(shape);
+  const auto& scan = truth.scan;
+  const double edge_allowance = truth.edge_allowance;
   std::vector<checker::ClFile> finishing;
   const int packets = s["grouping"]["packets"].get<int>();
   std::printf("  drom: %d packet(s), coverage %.4f, unmachinable %d\n", packets, s["grouping"]["coverage"].get<double>(), s["grouping"]["unmachinable"].get<int>());
@@ -98,8 +53,9 @@ void check_shape(const family::Shape& shape, bool expect_fewest) {
       if (!p.contains(op) || !fs::exists(folder / (std::string(op) + "_cl.csv"))) continue;
       const bool finish = std::string(op) == "finishing";
       const checker::ClFile cl = checker::read_cl_csv(folder / (std::string(op) + "_cl.csv"));
-      const double tolerance = finish ? kTu : 0.0;
-      const checker::PathResult r = checker::check_path(cl, finish ? finishing_tool() : roughing_tool(), scan, solid, tolerance, shape.open_edge, edge_band, tolerance + edge_allowance);
+      const double tolerance = finish ? judging::kTu : 0.0;
+      const checker::PathResult r = checker::check_path(cl, finish ? judging::finishing_tool() : judging::roughing_tool(), scan, truth.solid, tolerance, shape.open_edge,
+                                                        truth.edge_band, tolerance + edge_allowance);
       std::printf("  packet %d (tilt %.0f deg) %-9s: drom %lld over (deepest %.4f); checker %lld moves, over %lld / %lld / %lld, deepest %.4f (cloud) %.4f (truth) at (%.2f, %.2f, %.2f), "
                   "%.4f at the open edge\n",
                   k + 1, tilt, op, p[op]["check"]["positions_over_tolerance"].get<long long>(), p[op]["check"]["deepest_mm"].get<double>(), r.positions, r.over_cloud,
@@ -113,18 +69,8 @@ void check_shape(const family::Shape& shape, bool expect_fewest) {
     }
   }
 
-  checker::CoverageSettings c;
-  c.tool = finishing_tool();
-  // Reached (the finishing passed there): within the scallop bound, the chord tolerance, six noise
-  // deviations (drom rides the noise's highest points, and stays above what it cannot tell), twice the
-  // sag a ball may take between points `spacing` apart, and 0.05 mm, of the true surface. A point no
-  // pass reached is a tool radius or more from every pass.
-  c.reached = 0.005 + kTu + 6 * shape.noise + shape.spacing * shape.spacing / (2 * 3) + 0.05;
-  // Near an open sheet's edge the scan cannot tell where the part ends better than a few spacings
-  // (drom keeps its side three spacings out): not judged there.
-  c.unsure = shape.hidden_truth.points;
-  c.unsure_radius = 3.5 * shape.spacing;
-  const checker::CoverageResult cov = checker::check_coverage(finishing, shape.scanned_truth.points, shape.scanned_truth.normals, solid, c);
+  const checker::CoverageSettings c = judging::coverage_settings(shape);
+  const checker::CoverageResult cov = checker::check_coverage(finishing, shape.scanned_truth.points, shape.scanned_truth.normals, truth.solid, c);
   std::printf("  checker: %lld of %lld sampled true points machinable, %lld reached (%.2f %%), scallop %.4f mm (99 %%: %.4f)\n", cov.machinable, cov.sampled, cov.reached,
               100 * cov.coverage, cov.scallop, cov.scallop_p99);
   EXPECT_GE(cov.coverage, 0.99);
@@ -136,7 +82,7 @@ void check_shape(const family::Shape& shape, bool expect_fewest) {
     }
   }
   if (shape.undercut && expect_fewest) {
-    const int fewest = checker::fewest_directions(shape.scanned_truth.points, shape.scanned_truth.normals, solid, c, 0.95);
+    const int fewest = checker::fewest_directions(shape.scanned_truth.points, shape.scanned_truth.normals, truth.solid, c, 0.95);
     std::printf("  checker: the fewest directions reaching 95 %% of the machinable points: %d\n", fewest);
     EXPECT_LE(packets, fewest);
   }
