@@ -200,8 +200,9 @@ std::vector<char> cutter_clears_obstacles(std::span<const Eigen::Vector3d> point
   return clear;
 }
 
-// Stage 3: which directions the machine reaches see each point with the whole tool.
-void compute_visibility(const std::vector<Eigen::Vector3d>& collision, std::span<const Eigen::Vector3d> obstacles, const CopySettings& s, const machine::Kinematics& kin,
+// Stage 3: which directions the machine reaches see each point with the whole tool. Returns, per
+// point, whether its cutter would enter an obstacle (empty when none would).
+std::vector<char> compute_visibility(const std::vector<Eigen::Vector3d>& collision, std::span<const Eigen::Vector3d> obstacles, const CopySettings& s, const machine::Kinematics& kin,
                         CopyResult& out, const Say& say) {
   say("visibility: " + std::to_string(out.row_points.size()) + " points x the (" + std::to_string(static_cast<int>(s.visibility.phi_step)) + ", " +
       std::to_string(static_cast<int>(s.visibility.theta_step)) + ") degree grid");
@@ -213,11 +214,14 @@ void compute_visibility(const std::vector<Eigen::Vector3d>& collision, std::span
   // stands on it, the part's side, a fixture) is seen from no direction: the drop would lift the tool
   // off it whatever the direction.
   const std::vector<char> clear = cutter_clears_obstacles(out.row_points, out.row_normals, obstacles, s.finishing.tool.cutter, s.visibility.graze);
+  std::vector<char> blocked(clear.size(), 0);
   for (std::size_t i = 0; i < clear.size(); ++i) {
     if (clear[i]) continue;
-    ++out.blocked_by_obstacles;
+    ++out.blocked_by_obstacles, blocked[i] = 1;
     for (auto& column : out.visibility.columns) column[i >> 6] &= ~(std::uint64_t{1} << (i & 63));
   }
+  if (out.blocked_by_obstacles == 0) blocked.clear();
+  return blocked;
 }
 
 // The packets' settings with what the cycle criterion's floor needs: the finishing's level-ground
@@ -239,17 +243,12 @@ PacketSettings packet_settings(const CopySettings& s, const machine::Kinematics&
 }
 
 // Stage 4: packets; a leftover joins a packet whose direction reaches it with the whole window.
-void choose_packets(const geometry::PointCloud& cloud, const std::vector<Eigen::Vector3d>& collision, std::size_t obstacles_from, const CopySettings& s,
+void choose_packets(const geometry::PointCloud& cloud, const std::vector<Eigen::Vector3d>& collision, const std::vector<char>& blocked, const CopySettings& s,
                     const machine::Kinematics& kin, CopyResult& out, const Say& say) {
   std::map<int, std::unique_ptr<BodyCheck>> bodies;
   std::mutex body_lock;
-  // Leftovers whose cutter would enter an obstacle are re-attached to no packet either.
-  std::vector<char> blocked(out.row_points.size(), 0);
-  if (out.blocked_by_obstacles > 0) {
-    const std::vector<char> clear =
-        cutter_clears_obstacles(out.row_points, out.row_normals, std::span<const Eigen::Vector3d>(collision).subspan(obstacles_from), s.finishing.tool.cutter, s.visibility.graze);
-    for (std::size_t i = 0; i < clear.size(); ++i) blocked[i] = !clear[i];
-  }
+  // Leftovers whose cutter would enter an obstacle (`blocked`, from the visibility) are re-attached to
+  // no packet either.
   const auto reaches = [&](int i, int j) {
     const Eigen::Vector3d& d = out.visibility.directions.unit[static_cast<std::size_t>(j)];
     if (d.dot(out.row_normals[static_cast<std::size_t>(i)]) < 0) return false;
@@ -380,9 +379,9 @@ CopyResult copy_cloud(const geometry::PointCloud& cloud, const CopySettings& s, 
   // whatever a thinned point stood for. A leftover point is re-attached by a test on every point.
   const std::vector<Eigen::Vector3d> thinned = geometry::thinned(collision, 0.25);
   const std::size_t obstacles_from = cloud.size() + out.completion.size();
-  compute_visibility(thinned, std::span<const Eigen::Vector3d>(collision).subspan(obstacles_from), s, kin, out, say);
+  const std::vector<char> blocked = compute_visibility(thinned, std::span<const Eigen::Vector3d>(collision).subspan(obstacles_from), s, kin, out, say);
   watch.stage("visibility");
-  choose_packets(cloud, collision, obstacles_from, s, kin, out, say);
+  choose_packets(cloud, collision, blocked, s, kin, out, say);
   watch.stage("packets");
   std::optional<geometry::CloudVoxelMap> map;
   if (s.rough) map.emplace(collision, roughing_voxel(s.roughing));  // the obstacles too: roughing must not enter the base or a fixture
