@@ -232,6 +232,12 @@ void read_closed_loop(TomlReader& r, Case& c) {
   c.prior_scale = r.real("control.prior_scale", Range::positive(), c.prior_scale);
   c.use_stock_top = r.boolean("control.use_stock_top", c.use_stock_top);
   c.model_tolerance = r.real("control.model_tolerance", Range::positive(), c.model_tolerance);
+  c.replan_tool_diameter = r.real("replan.tool_diameter", Range::closed(0.1, 100), c.replan_tool_diameter);
+  c.replan_scallop = r.real("replan.scallop", Range::closed(1e-4, 1), c.replan_scallop);
+  c.replan_tolerance = r.real("replan.tolerance", Range::closed(1e-4, 1), c.replan_tolerance);
+  c.replan_step = r.real("replan.step", Range::closed(0.01, 100), c.replan_step);
+  c.replan_sample_spacing = r.real("replan.sample_spacing", Range::closed(0.01, 100), c.replan_sample_spacing);
+  c.replan_scan_step = r.real("replan.scan_step", Range::closed(0.01, 100), c.replan_scan_step);
   // The same keys and ranges as machine/program_keys.cpp (the case holds plain values: case_file/ reads no machine).
   c.program_tool_number = static_cast<int>(r.integer("program.tool_number", 1, 999, c.program_tool_number));
   c.program_spindle_speed = r.real("program.spindle_speed", Range::closed(0, 200000), c.program_spindle_speed);

@@ -119,6 +119,15 @@ struct Case {
   bool use_stock_top = true;         // fit the laser's readings of the unmachined top too (absolute w)
   double model_tolerance = 1e-3;     // mm: the POD bound drom run reduces the offline database to
 
+  // [replan]: drom run --replan, the finish re-planned on the final part (loop/replanned_finish.hpp,
+  // loop/final_scan.hpp).
+  double replan_tool_diameter = 10;   // mm, a ball
+  double replan_scallop = 0.002;      // mm
+  double replan_tolerance = 0.002;    // mm: the chord tolerance along the passes
+  double replan_step = 1;             // mm along the passes
+  double replan_sample_spacing = 0.5; // mm between the final surface's sampled points
+  double replan_scan_step = 0.5;      // mm between the unclamped part's laser profiles
+
   // [program]: the corrected program's header and moves between cuts, the keys drom finish, copy
   // and orient read (machine/program_keys.hpp; docs/case-files.md, "[program]").
   int program_tool_number = 1;       // T and H

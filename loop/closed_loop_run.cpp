@@ -9,6 +9,7 @@
 // Stages 2-3 are kept under --out and reused while the case that made them is unchanged, so a rerun
 // with other sensor or control settings costs only the loop.
 #include "loop/closed_loop_run.hpp"
+#include "loop/final_scan.hpp"
 #include "loop/replanned_finish.hpp"
 #include "machine/cl_data.hpp"
 #include "paths/copy/cloud_path.hpp"
@@ -25,6 +26,25 @@
 #include <thread>
 
 namespace drom::loop {
+
+namespace {
+
+nlohmann::json replanned_json(const ReplannedFinish& r, double tool_diameter) {
+  return {{"cloud_points", r.cloud_points},
+          {"upward_faces", r.faces},
+          {"tool", "ball"},
+          {"tool_diameter_mm", tool_diameter},
+          {"passes", r.replanned.passes},
+          {"path_points", r.replanned.path.size()},
+          {"gaps", r.replanned.gaps},
+          {"cut_nodes_judged", r.judged},
+          {"max_distance_to_truth_mm", r.max_error},
+          {"rms_distance_to_truth_mm", r.rms_error},
+          {"nominal_max_distance_to_truth_mm", r.nominal_max_error},
+          {"nominal_rms_distance_to_truth_mm", r.nominal_rms_error}};
+}
+
+}  // namespace
 
 namespace {
 
@@ -76,6 +96,71 @@ nlohmann::json sync_json(const case_file::Case& c, const online::LoopSimulationS
 
 }  // namespace
 
+// The finishing pass re-planned on the predicted final shape, and on the unclamped part as the loop's
+// laser scans it (the final-shape basis fitted to the scan), each judged against the truth's; their
+// CL files are added to `files`.
+nlohmann::json replan_finishes(const case_file::Case& c, const ClosedLoopInputs& in, const LoopPair& loops, const RunOptions& options,
+                               std::vector<std::string>& files) {
+  const online::LoopSimulationResult& corrected = loops.corrected;
+  nlohmann::json replan;
+  if (!options.quiet) std::cerr << "drom run: the finishing pass re-planned on the predicted final shape\n";
+  const online::FinalShape& predicted = corrected.shapes.back();
+  const Eigen::Matrix3Xd& truth = in.truth.final_displacement;
+  ReplanSettings replan_settings;
+  replan_settings.finishing.tool.cutter = {paths::ToolKind::ball, c.replan_tool_diameter / 2, c.replan_tool_diameter / 2};
+  replan_settings.finishing.scallop = c.replan_scallop;
+  replan_settings.finishing.chord_tolerance = c.replan_tolerance;
+  replan_settings.finishing.longitudinal_step = c.replan_step;
+  replan_settings.sample_spacing = c.replan_sample_spacing;
+  const ReplannedFinish r = replan_finish(predicted, truth, replan_settings);
+  write_file_atomically(options.out / "replanned_finish_cl.csv",
+                        machine::cl_csv(paths::to_cl_program(r.replanned.path, Eigen::Matrix3d::Identity(), 1000, "drom run --replan (predicted shape)")));
+  files.push_back("replanned_finish_cl.csv");
+  replan = replanned_json(r, c.replan_tool_diameter);
+  replan["max_upward_error_mm"] = max_upward_difference(predicted, predicted.displacement, truth);
+
+  try {
+    if (!options.quiet) std::cerr << "drom run: the unclamped part scanned by the laser, the final-shape basis fitted, the finish re-planned on it\n";
+    const auto scan_start = std::chrono::steady_clock::now();
+    FinalScanSettings scan_settings;
+    scan_settings.seed = c.sensor_seed + 1;  // a draw of its own, after the loop's
+    scan_settings.step = c.replan_scan_step;
+    const Eigen::Matrix3Xd on_part = predicted.nodes + truth;
+    const double margin = 5;
+    const FinalScan scan = scan_final_part(upward_height_field(predicted, truth, scan_settings.min_up), on_part.topRows<2>().rowwise().minCoeff().array() - margin,
+                                           on_part.topRows<2>().rowwise().maxCoeff().array() + margin, on_part.row(2).maxCoeff(), loops.corrected_settings.sheet,
+                                           loops.corrected_settings.errors, scan_settings);
+    // The scan alone, and the scan updating the loop's own estimate (the points the laser read while
+    // the part was clamped): the finish is re-planned on the latter, every laser point weighing in.
+    const ScanFit alone = fit_final_shape(predicted, in.model.final_basis, scan.points, scan_settings);
+    const ScanPrior loop_estimate{corrected.estimate.alpha, corrected.estimate.covariance, std::max(loops.corrected_settings.errors.noise_sd, 1e-6)};
+    const ScanFit fit = fit_final_shape(predicted, in.model.final_basis, scan.points, scan_settings, &loop_estimate);
+    const double fit_seconds = seconds_since(scan_start);
+    const ReplannedFinish laser = replan_finish(fit.shape, truth, replan_settings);
+    write_file_atomically(options.out / "replanned_finish_laser_cl.csv",
+                          machine::cl_csv(paths::to_cl_program(laser.replanned.path, Eigen::Matrix3d::Identity(), 1000, "drom run --replan (laser scan)")));
+    files.push_back("replanned_finish_laser_cl.csv");
+    const auto fit_json = [&](const ScanFit& f) {
+      return nlohmann::json{{"points_used", f.used}, {"off_part", f.off_part}, {"outliers", f.outliers}, {"residual_rms_mm", f.residual_rms},
+                            {"iterations", f.iterations}, {"unobserved_directions", f.unobserved}, {"max_sd_mm", f.shape.sd.cwiseAbs().maxCoeff()},
+                            {"max_upward_error_mm", max_upward_difference(predicted, f.shape.displacement, truth)}};
+    };
+    replan["laser_scan"] = replanned_json(laser, c.replan_tool_diameter);
+    replan["laser_scan"]["scan"] = {{"profiles", scan.profiles}, {"points", scan.points.size()}, {"no_reading", scan.no_reading},
+                                    {"step_mm", scan_settings.step}, {"noise_mm", loops.corrected_settings.errors.noise_sd}};
+    replan["laser_scan"]["fit"] = fit_json(fit);
+    replan["laser_scan"]["fit"]["basis_columns"] = fit.alpha.size();
+    replan["laser_scan"]["fit"]["scan_and_fits_seconds"] = fit_seconds;
+    replan["laser_scan"]["fit_scan_alone"] = fit_json(alone);
+    replan["laser_scan"]["within_twice_model_based"] = laser.max_error <= 2 * r.max_error;
+  } catch (const std::invalid_argument& e) {
+    // The model-based finish and the loop's outputs stand; the scan's failure is reported beside them.
+    replan["laser_scan"] = {{"error", e.what()}};
+    if (!options.quiet) std::cerr << "drom run: the re-plan from the laser's scan failed: " << e.what() << "\n";
+  }
+  return replan;
+}
+
 RunResult run_closed_loop(const case_file::Case& c, const RunOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   RunOptions as_run = options;
@@ -93,26 +178,8 @@ RunResult run_closed_loop(const case_file::Case& c, const RunOptions& options) {
 
   LoopOutputs outputs = write_loop_outputs(options.out, c, in.model, loops.corrected_truth.part, corrected, uncorrected);
   std::vector<std::string>& files = outputs.files;
-  // The finishing pass re-planned on the predicted final shape, judged against the truth's.
   nlohmann::json replan;
-  if (options.replan && !corrected.shapes.empty()) {
-    if (!options.quiet) std::cerr << "drom run: the finishing pass re-planned on the predicted final shape\n";
-    const ReplannedFinish r = replan_finish(corrected.shapes.back(), in.truth.final_displacement);
-    const machine::ClProgram cl = paths::to_cl_program(r.replanned.path, Eigen::Matrix3d::Identity(), 1000, "drom run --replan");
-    write_file_atomically(options.out / "replanned_finish_cl.csv", machine::cl_csv(cl));
-    files.push_back("replanned_finish_cl.csv");
-    replan = {{"cloud_points", r.cloud_points},
-              {"upward_faces", r.faces},
-              {"tool", "ball D10"},
-              {"passes", r.replanned.passes},
-              {"path_points", r.replanned.path.size()},
-              {"gaps", r.replanned.gaps},
-              {"cut_nodes_judged", r.judged},
-              {"max_distance_to_truth_mm", r.max_error},
-              {"rms_distance_to_truth_mm", r.rms_error},
-              {"nominal_max_distance_to_truth_mm", r.nominal_max_error},
-              {"nominal_rms_distance_to_truth_mm", r.nominal_rms_error}};
-  }
+  if (options.replan && !loops.corrected.shapes.empty()) replan = replan_finishes(c, in, loops, options, files);
   files.push_back("summary.json");
   const Headline h = headline(corrected, uncorrected, c.shape_pass);
   nlohmann::json summary = {

@@ -57,6 +57,13 @@ int run_command(const CommandOptions& options) {
     const auto& q = r.summary["replanned_finish"];
     std::printf("  %-52s %.4f mm (the nominal path: %.4f mm)\n", "re-planned finish, max distance to the truth", q["max_distance_to_truth_mm"].get<double>(),
                 q["nominal_max_distance_to_truth_mm"].get<double>());
+    if (q.contains("laser_scan") && q["laser_scan"].contains("error")) {
+      std::printf("  %-52s %s\n", "re-planned from the laser's scan", ("failed: " + q["laser_scan"]["error"].get<std::string>()).c_str());
+    } else if (q.contains("laser_scan")) {
+      const auto& l = q["laser_scan"];
+      std::printf("  %-52s %.4f mm (%lld scan points, fit residual %.4f mm)\n", "re-planned from the laser's scan, max distance", l["max_distance_to_truth_mm"].get<double>(),
+                  l["scan"]["points"].get<long long>(), l["fit"]["residual_rms_mm"].get<double>());
+    }
   }
   if (r.program_verdict && r.program_verdict->runnable())
     std::printf("  %-52s %s\n", ("corrected program on " + c.sync_machine).c_str(), r.program_verdict->summary_line().c_str());
