@@ -236,7 +236,7 @@ void read_closed_loop(TomlReader& r, Case& c) {
   c.replan_scallop = r.real("replan.scallop", Range::closed(1e-4, 1), c.replan_scallop);
   c.replan_tolerance = r.real("replan.tolerance", Range::closed(1e-4, 1), c.replan_tolerance);
   c.replan_step = r.real("replan.step", Range::closed(0.01, 100), c.replan_step);
-  c.replan_sample_spacing = r.real("replan.sample_spacing", Range::closed(0.01, 100), c.replan_sample_spacing);
+  c.replan_sample_spacing = r.real("replan.sample_spacing", Range::closed(0, 100), c.replan_sample_spacing);
   c.replan_scan_step = r.real("replan.scan_step", Range::closed(0.01, 100), c.replan_scan_step);
   // The same keys and ranges as machine/program_keys.cpp (the case holds plain values: case_file/ reads no machine).
   c.program_tool_number = static_cast<int>(r.integer("program.tool_number", 1, 999, c.program_tool_number));

@@ -125,7 +125,7 @@ struct Case {
   double replan_scallop = 0.002;      // mm
   double replan_tolerance = 0.002;    // mm: the chord tolerance along the passes
   double replan_step = 1;             // mm along the passes
-  double replan_sample_spacing = 0.5; // mm between the final surface's sampled points
+  double replan_sample_spacing = 0;   // mm between the final surface's sampled points; 0: sqrt(8 R tolerance)
   double replan_scan_step = 0.5;      // mm between the unclamped part's laser profiles
 
   // [program]: the corrected program's header and moves between cuts, the keys drom finish, copy

@@ -112,11 +112,14 @@ nlohmann::json replan_finishes(const case_file::Case& c, const ClosedLoopInputs&
   replan_settings.finishing.chord_tolerance = c.replan_tolerance;
   replan_settings.finishing.longitudinal_step = c.replan_step;
   replan_settings.sample_spacing = c.replan_sample_spacing;
-  const ReplannedFinish r = replan_finish(predicted, truth, replan_settings);
+  ReplannedFinish r = replan_finish(predicted, truth, replan_settings);
   write_file_atomically(options.out / "replanned_finish_cl.csv",
                         machine::cl_csv(paths::to_cl_program(r.replanned.path, Eigen::Matrix3d::Identity(), 1000, "drom run --replan (predicted shape)")));
   files.push_back("replanned_finish_cl.csv");
   replan = replanned_json(r, c.replan_tool_diameter);
+  replan["sample_spacing_mm"] = sample_spacing(replan_settings);
+  const double model_based = r.max_error;
+  r.replanned = {};  // the path is written: its memory goes before the laser's finish takes as much
   replan["max_upward_error_mm"] = max_upward_difference(predicted, predicted.displacement, truth);
 
   try {
@@ -127,7 +130,7 @@ nlohmann::json replan_finishes(const case_file::Case& c, const ClosedLoopInputs&
     scan_settings.step = c.replan_scan_step;
     const Eigen::Matrix3Xd on_part = predicted.nodes + truth;
     const double margin = 5;
-    const FinalScan scan = scan_final_part(upward_height_field(predicted, truth, scan_settings.min_up), on_part.topRows<2>().rowwise().minCoeff().array() - margin,
+    FinalScan scan = scan_final_part(upward_height_field(predicted, truth, scan_settings.min_up), on_part.topRows<2>().rowwise().minCoeff().array() - margin,
                                            on_part.topRows<2>().rowwise().maxCoeff().array() + margin, on_part.row(2).maxCoeff(), loops.corrected_settings.sheet,
                                            loops.corrected_settings.errors, scan_settings);
     // The scan alone, and the scan updating the loop's own estimate (the points the laser read while
@@ -136,6 +139,8 @@ nlohmann::json replan_finishes(const case_file::Case& c, const ClosedLoopInputs&
     const ScanPrior loop_estimate{corrected.estimate.alpha, corrected.estimate.covariance, std::max(loops.corrected_settings.errors.noise_sd, 1e-6)};
     const ScanFit fit = fit_final_shape(predicted, in.model.final_basis, scan.points, scan_settings, &loop_estimate);
     const double fit_seconds = seconds_since(scan_start);
+    const long long scan_points = static_cast<long long>(scan.points.size());
+    std::vector<online::MeasuredPoint>().swap(scan.points);
     const ReplannedFinish laser = replan_finish(fit.shape, truth, replan_settings);
     write_file_atomically(options.out / "replanned_finish_laser_cl.csv",
                           machine::cl_csv(paths::to_cl_program(laser.replanned.path, Eigen::Matrix3d::Identity(), 1000, "drom run --replan (laser scan)")));
@@ -146,13 +151,13 @@ nlohmann::json replan_finishes(const case_file::Case& c, const ClosedLoopInputs&
                             {"max_upward_error_mm", max_upward_difference(predicted, f.shape.displacement, truth)}};
     };
     replan["laser_scan"] = replanned_json(laser, c.replan_tool_diameter);
-    replan["laser_scan"]["scan"] = {{"profiles", scan.profiles}, {"points", scan.points.size()}, {"no_reading", scan.no_reading},
+    replan["laser_scan"]["scan"] = {{"profiles", scan.profiles}, {"points", scan_points}, {"no_reading", scan.no_reading},
                                     {"step_mm", scan_settings.step}, {"noise_mm", loops.corrected_settings.errors.noise_sd}};
     replan["laser_scan"]["fit"] = fit_json(fit);
     replan["laser_scan"]["fit"]["basis_columns"] = fit.alpha.size();
     replan["laser_scan"]["fit"]["scan_and_fits_seconds"] = fit_seconds;
     replan["laser_scan"]["fit_scan_alone"] = fit_json(alone);
-    replan["laser_scan"]["within_twice_model_based"] = laser.max_error <= 2 * r.max_error;
+    replan["laser_scan"]["within_twice_model_based"] = laser.max_error <= 2 * model_based;
   } catch (const std::invalid_argument& e) {
     // The model-based finish and the loop's outputs stand; the scan's failure is reported beside them.
     replan["laser_scan"] = {{"error", e.what()}};

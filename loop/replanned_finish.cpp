@@ -35,7 +35,9 @@ std::vector<Eigen::Vector3d> upward_surface_cloud(const online::FinalShape& shap
       x[k] = shape.nodes.col(node), u[k] = displacement.col(node);
     }
     const Eigen::Vector3d normal = (x[1] - x[0]).cross(x[m - 1] - x[0]);
-    if (!(normal.norm() > 0) || std::abs(normal.z()) < min_up * normal.norm()) continue;
+    // Outward normals: the part's bottom, never the highest over its xy, would double the cloud for
+    // nothing (and poke out past the bent top's edge, where the side is).
+    if (!(normal.norm() > 0) || normal.z() < min_up * normal.norm()) continue;
     ++count;
     const double size = std::max((x[1] - x[0]).norm(), (x[m - 1] - x[0]).norm());
     const int n = std::max(1, static_cast<int>(std::ceil(size / spacing)));
@@ -58,14 +60,21 @@ std::vector<Eigen::Vector3d> upward_surface_cloud(const online::FinalShape& shap
   return cloud;
 }
 
+double sample_spacing(const ReplanSettings& s) {
+  if (s.sample_spacing > 0) return s.sample_spacing;
+  return std::sqrt(8 * s.finishing.tool.cutter.radius * s.finishing.chord_tolerance);
+}
+
 ReplannedFinish replan_finish(const online::FinalShape& shape, const Eigen::Matrix3Xd& truth, const ReplanSettings& s) {
   ReplannedFinish out;
+  const double spacing = sample_spacing(s);
+  if (!(spacing > 0) || !std::isfinite(spacing)) throw std::invalid_argument("replan_finish: the sample spacing must be positive");
   const Eigen::Matrix3Xd zero = Eigen::Matrix3Xd::Zero(3, shape.nodes.cols());
-  const auto predicted = upward_surface_cloud(shape, shape.displacement, s.sample_spacing, s.min_up, &out.faces);
-  const auto true_cloud = upward_surface_cloud(shape, truth, s.sample_spacing, s.min_up);
-  const auto drawn = upward_surface_cloud(shape, zero, s.sample_spacing, s.min_up);
+  const auto predicted = upward_surface_cloud(shape, shape.displacement, spacing, s.min_up, &out.faces);
+  const auto true_cloud = upward_surface_cloud(shape, truth, spacing, s.min_up);
+  const auto drawn = upward_surface_cloud(shape, zero, spacing, s.min_up);
   out.cloud_points = static_cast<long long>(predicted.size());
-  const double cell = std::max(s.sample_spacing, s.finishing.tool.cutter.radius / 2);
+  const double cell = std::max(spacing, s.finishing.tool.cutter.radius / 2);
   const geometry::CloudBins bins(predicted, cell), true_bins(true_cloud, cell), drawn_bins(drawn, cell);
   // The area: where the drawn part has an upward face (its outline, no margin: the tool stays on it).
   const paths::CloudArea area(drawn, s.finishing.longitudinal_step, 0);

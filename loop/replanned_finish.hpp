@@ -15,7 +15,9 @@
 namespace drom::loop {
 
 struct ReplanSettings {
-  double sample_spacing = 0.5;  // mm between the cloud's points on each face
+  // mm between the cloud's points on each face; 0: sqrt(8 R Tu), so that the bumps a ball of radius R
+  // rides between points (spacing^2 / 8R) stay within the chord tolerance Tu the finish refines to.
+  double sample_spacing = 0;
   double min_up = 0.9;          // a face is finished from +Z when its normal's Z exceeds this
   paths::CloudFinishingSettings finishing;  // a ball D10, 1 mm along the passes, 2 µm scallop, by default
   ReplanSettings();
@@ -33,8 +35,12 @@ struct ReplannedFinish {
 // true final displacement at the same nodes.
 ReplannedFinish replan_finish(const online::FinalShape& shape, const Eigen::Matrix3Xd& truth, const ReplanSettings& settings = {});
 
-// The final part's upward faces moved by `displacement`, sampled about every `spacing` mm (bilinear
-// in each quad, linear in each triangle, from the corners of quadratic faces).
+// The spacing the settings sample at (their own, or sqrt(8 R Tu)).
+double sample_spacing(const ReplanSettings& settings);
+
+// The final part's upward faces (outward normal within acos(min_up) of +Z) moved by `displacement`,
+// sampled about every `spacing` mm (bilinear in each quad, linear in each triangle, from the corners
+// of quadratic faces).
 std::vector<Eigen::Vector3d> upward_surface_cloud(const online::FinalShape& shape, const Eigen::Matrix3Xd& displacement, double spacing, double min_up, long long* faces = nullptr);
 
 }  // namespace drom::loop
