@@ -10,6 +10,8 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include "tests/loop/plate_shape.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -21,25 +23,7 @@ namespace {
 
 constexpr double kLength = 200, kWidth = 120, kHalfThickness = 5;
 
-drom::online::FinalShape plate(int nx, int ny) {
-  drom::online::FinalShape s;
-  s.nodes.resize(3, (nx + 1) * (ny + 1));
-  for (int j = 0; j <= ny; ++j)
-    for (int i = 0; i <= nx; ++i) s.nodes.col(j * (nx + 1) + i) = Eigen::Vector3d(kLength * i / nx - kLength / 2, kWidth * j / ny - kWidth / 2, 0);
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) {
-      const int a = j * (nx + 1) + i;
-      s.faces.insert(s.faces.end(), {a, a + 1, a + nx + 2, a + nx + 1});
-    }
-  // A side face (normal along Y), which the laser does not look at.
-  const int base = static_cast<int>(s.nodes.cols());
-  s.nodes.conservativeResize(3, base + 2);
-  s.nodes.col(base) = Eigen::Vector3d(-kLength / 2, -kWidth / 2, -10), s.nodes.col(base + 1) = Eigen::Vector3d(-kLength / 2 + kLength / nx, -kWidth / 2, -10);
-  s.faces.insert(s.faces.end(), {base, base + 1, 1, 0});
-  s.face_nodes = 4;
-  s.displacement = s.sd = Eigen::Matrix3Xd::Zero(3, s.nodes.cols());
-  return s;
-}
+drom::online::FinalShape plate(int nx, int ny) { return drom::test::plate_shape(nx, ny, kLength, kWidth, -10); }
 
 // Three bending modes: w and the top's in-plane sliding -h grad w, rows (node, component).
 Eigen::MatrixXd bending_basis(const drom::online::FinalShape& s) {

@@ -6,6 +6,8 @@
 // on the drawn plate, is off by the whole bow.
 #include "loop/replanned_finish.hpp"
 
+#include "tests/loop/plate_shape.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,25 +16,7 @@
 
 namespace {
 
-drom::online::FinalShape plate(int nx, int ny, double lx, double ly) {
-  drom::online::FinalShape s;
-  s.nodes.resize(3, (nx + 1) * (ny + 1));
-  for (int j = 0; j <= ny; ++j)
-    for (int i = 0; i <= nx; ++i) s.nodes.col(j * (nx + 1) + i) = Eigen::Vector3d(lx * i / nx - lx / 2, ly * j / ny - ly / 2, 0);
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) {
-      const int a = j * (nx + 1) + i;
-      s.faces.insert(s.faces.end(), {a, a + 1, a + nx + 2, a + nx + 1});
-    }
-  // A side face (normal along Y), which the upward filter leaves out.
-  const int base = static_cast<int>(s.nodes.cols());
-  s.nodes.conservativeResize(3, base + 2);
-  s.nodes.col(base) = Eigen::Vector3d(-lx / 2, -ly / 2, -5), s.nodes.col(base + 1) = Eigen::Vector3d(-lx / 2 + lx / nx, -ly / 2, -5);
-  s.faces.insert(s.faces.end(), {base, base + 1, 1, 0});
-  s.face_nodes = 4;
-  s.displacement = s.sd = Eigen::Matrix3Xd::Zero(3, s.nodes.cols());
-  return s;
-}
+drom::online::FinalShape plate(int nx, int ny, double lx, double ly) { return drom::test::plate_shape(nx, ny, lx, ly, -5); }
 
 TEST(ReplannedFinish, FollowsThePredictedShapeWithinItsErrorWhereTheNominalPathIsOffByTheBow) {
   const double lx = 200, ly = 120, bow = 1.6, ripple = 0.003;
