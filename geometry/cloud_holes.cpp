@@ -137,9 +137,13 @@ FilledHoles fill_holes(std::span<const Eigen::Vector3d> points, const ScanSurvey
   // everywhere only if some turn up (a 10^6-point scan costs seconds to go through whole).
   std::mt19937 rng(4545);
   const std::size_t sample = std::min<std::size_t>(points.size(), 4000);
+  // Distinct indices: fill(i) appends to found[i], so one index drawn twice would be filled by two
+  // threads at once (the heap corruption CI met on the femur and the shape family).
   std::vector<std::size_t> drawn(sample);
   for (std::size_t d = 0; d < sample; ++d) drawn[d] = sample == points.size() ? d : std::uniform_int_distribution<std::size_t>(0, points.size() - 1)(rng);
-  tbb::parallel_for(std::size_t(0), sample, [&](std::size_t d) { fill(drawn[d]); });
+  std::sort(drawn.begin(), drawn.end());
+  drawn.erase(std::unique(drawn.begin(), drawn.end()), drawn.end());
+  tbb::parallel_for(std::size_t(0), drawn.size(), [&](std::size_t d) { fill(drawn[d]); });
   bool any = false;
   for (const std::size_t i : drawn) any = any || !found[i].empty();
   if (!any) {
