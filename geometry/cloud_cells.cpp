@@ -307,4 +307,15 @@ double LocalSurface::leverage(const Eigen::Vector2d& g) const {
   return x.dot(normal_.ldlt().solve(x));
 }
 
+double safe_lift_deviations(std::size_t fits) {
+  // The one-sided tail 0.5 erfc(z / sqrt 2) = 1 / (10 fits), by bisection (erfc falls monotonically).
+  const double tail = 1 / (10.0 * static_cast<double>(std::max<std::size_t>(fits, 1)));
+  double lo = 0, hi = 40;
+  for (int it = 0; it < 100; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (0.5 * std::erfc(mid / std::numbers::sqrt2) > tail ? lo : hi) = mid;
+  }
+  return std::max(3.0, 0.5 * (lo + hi));
+}
+
 }  // namespace drom::geometry

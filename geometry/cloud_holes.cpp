@@ -27,17 +27,39 @@ FilledHoles fill_holes(std::span<const Eigen::Vector3d> points, const ScanSurvey
   const CloudKdTree& tree = survey.tree;
   const double step = hole * std::sqrt(2.0);
   const double flat = flat_face_residual(noise);
-  constexpr int k = 16;
-  std::vector<std::vector<Eigen::Vector3d>> found(points.size());
+  // The fit's neighbourhood: its 16 nearest points. On a noisy scan (three deviations above the 5 um
+  // a smooth face may leave) a smooth neighbourhood is fitted again over its 40 nearest, which cuts the
+  // fit's uncertainty, and so the lift that keeps the tool above the surface, by 1.6, when those 40
+  // still make a smooth face (a quadric follows a curved face over the few spacings they span; a
+  // crease, an edge, or the 40 reaching another face keeps the 16). The cell is bounded by the 16 nearest.
+  constexpr int cell_neighbours = 16, noisy_neighbours = 40;
+  const bool noisy = 3 * noise > 0.005;
+  // The 40 make a smooth face when the quadric leaves no more than the noise does (its residual's
+  // deviation about 0.93 noise, give or take 0.12 over 40 points): 1.3 noise and 2 um. A rounded-off
+  // edge among them leaves more, and a quadric over it would cut the corner.
+  const double wide_flat = 1.3 * noise + 0.002;
+  // A fill point, before it is lifted: on the fit, its normal, and the fit's uncertainty there (in noise
+  // deviations); a crease's line point is taken as it is (spread 0).
+  struct Spot {
+    Eigen::Vector3d on, normal;
+    double sd = 0;
+  };
+  std::vector<std::vector<Spot>> found(points.size());
   const auto fill = [&](std::size_t i) {
     std::vector<int> near;
     std::vector<double> d2;
-    tree.nearest(points[i], k, near, d2);
+    tree.nearest(points[i], noisy ? noisy_neighbours : cell_neighbours, near, d2);
     if (near.size() < 10) return;
     std::vector<Eigen::Vector3d> q;
-    for (const int j : near) q.push_back(points[static_cast<std::size_t>(j)]);
-    const LocalSurface local(q, flat);
+    for (std::size_t r = 0; r < std::min<std::size_t>(near.size(), cell_neighbours); ++r) q.push_back(points[static_cast<std::size_t>(near[r])]);
+    LocalSurface local(q, flat);
     if (local.kind() == LocalSurface::Kind::none) return;
+    if (noisy && local.kind() == LocalSurface::Kind::quadric && near.size() > q.size()) {
+      std::vector<Eigen::Vector3d> wide;
+      for (const int j : near) wide.push_back(points[static_cast<std::size_t>(j)]);
+      LocalSurface smoother(wide, wide_flat);
+      if (smoother.kind() == LocalSurface::Kind::quadric) local = std::move(smoother), q = std::move(wide);
+    }
     const LocalPlane& frame = local.frame();
     std::vector<Eigen::Vector2d> uv(q.size());
     for (std::size_t r = 0; r < q.size(); ++r) uv[r] = local.uv(q[r]);
@@ -46,15 +68,15 @@ FilledHoles fill_holes(std::span<const Eigen::Vector3d> points, const ScanSurvey
     // This point's Voronoi cell may reach as far as its farthest neighbour: a grid over that square,
     // anchored on the point.
     double reach = 0;
-    for (const auto& p : uv) reach = std::max(reach, (p - me).norm());
+    for (std::size_t r = 0; r < std::min<std::size_t>(uv.size(), cell_neighbours); ++r) reach = std::max(reach, (uv[r] - me).norm());
     const double w_lo = local.lowest(), w_hi = local.highest();
     const double margin = flat + 0.05 * reach;
     std::vector<int> around;
     std::vector<double> around_d2;
     // A surface point `on` (with its normal) offered as a fill: this point's cell (it is the scan's
     // nearest to it), a hole (none within `hole`), and inside the scan (its nearest points all round
-    // it in the plane (u, v), no half-plane free: not past the rim); put three times the fit's own
-    // uncertainty there above and below.
+    // it in the plane (u, v), no half-plane free: not past the rim); lifted above and below by the fit's own
+    // uncertainty once every cell is filled.
     const auto offer = [&](const Eigen::Vector3d& on, const Eigen::Vector3d& normal, const Eigen::Vector3d& u, const Eigen::Vector3d& v, double spread) {
       if (!(spread <= 4)) return;
       tree.nearest(on, 12, around, around_d2);
@@ -69,13 +91,7 @@ FilledHoles fill_holes(std::span<const Eigen::Vector3d> points, const ScanSurvey
       double widest = angles.front() + 2 * std::numbers::pi - angles.back();
       for (std::size_t r = 1; r < angles.size(); ++r) widest = std::max(widest, angles[r] - angles[r - 1]);
       if (widest >= std::numbers::pi * 0.9) return;
-      const double lift = 3 * noise * std::sqrt(spread);
-      if (lift > 0) {
-        found[i].push_back(on + lift * normal);
-        found[i].push_back(on - lift * normal);
-      } else {
-        found[i].push_back(on);
-      }
+      found[i].push_back({on, normal, noise * std::sqrt(spread)});
     };
     const int span = static_cast<int>(std::ceil(reach / step));
     if (local.kind() == LocalSurface::Kind::crease) {
@@ -129,7 +145,7 @@ FilledHoles fill_holes(std::span<const Eigen::Vector3d> points, const ScanSurvey
         if ((on - points[i]).norm() > reach) continue;
         tree.nearest(on, 1, around, around_d2);
         if (around.empty() || around_d2.front() < (on - points[i]).squaredNorm() - 1e-12 || around_d2.front() <= hole * hole) continue;
-        found[i].push_back(on);
+        found[i].push_back({on, Eigen::Vector3d::Zero(), 0.0});
       }
     }
   };
@@ -153,10 +169,22 @@ FilledHoles fill_holes(std::span<const Eigen::Vector3d> points, const ScanSurvey
   out.needed = true;
   for (const std::size_t i : drawn) found[i].clear();
   tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t i) { fill(i); });
-  for (std::size_t i = 0; i < found.size(); ++i) {
-    out.points.insert(out.points.end(), found[i].begin(), found[i].end());
-    out.source.insert(out.source.end(), found[i].size(), static_cast<int>(i));
-  }
+  // Each point's fit stands on its own: the lift is set by how many of them put points (a sparse scan
+  // fills from nearly every neighbourhood, a dense one from a few at its gaps).
+  std::size_t fits = 0;
+  for (const auto& spots : found) fits += spots.empty() ? 0 : 1;
+  const double deviations = safe_lift_deviations(fits);
+  for (std::size_t i = 0; i < found.size(); ++i)
+    for (const Spot& spot : found[i]) {
+      const double lift = deviations * spot.sd;
+      if (lift > 0) {
+        out.points.push_back(spot.on + lift * spot.normal), out.points.push_back(spot.on - lift * spot.normal);
+        out.source.insert(out.source.end(), 2, static_cast<int>(i));
+      } else {
+        out.points.push_back(spot.on);
+        out.source.push_back(static_cast<int>(i));
+      }
+    }
   return out;
 }
 
