@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <string>
 #include <unistd.h>
@@ -69,6 +70,7 @@ int main(int argc, char** argv) {
       if (r.deepest_truth > deepest_truth) worst_truth = r.worst_truth_part;
       deepest_cloud = std::max(deepest_cloud, r.deepest_cloud), deepest_truth = std::max(deepest_truth, r.deepest_truth);
       deepest_edge = std::max(deepest_edge, r.deepest_at_edge);
+      if (r.over_cloud > 0 && over == 0) std::fprintf(stderr, "%s, packet %d: %s\n", shape.name.c_str(), p + 1, r.first_over.c_str());
       over += r.over_cloud;  // rapids leaving a cut node inherit its depth in the truth: judged by the deepest
     }
     const checker::CoverageSettings c = judging::coverage_settings(shape);
@@ -82,7 +84,13 @@ int main(int argc, char** argv) {
                 separator, shape.name.c_str(), shape.scan.points.size() - shape.outliers, packets, largest_tilt, wall, cpu, deepest_cloud, deepest_truth, worst_truth.x(), worst_truth.y(), worst_truth.z(), deepest_edge, over, refused,
                 cov.coverage, cov.scallop, ok ? "true" : "false");
     std::fflush(stdout);
-    if (!keep) fs::remove_all(dir);
+    if (keep) {  // the machinable true points no pass reached, to look at beside the copy
+      std::ofstream missed(dir / "missed.csv");
+      missed << "x,y,z\n";
+      for (const auto& p : cov.missed) missed << p.x() << ',' << p.y() << ',' << p.z() << '\n';
+    } else {
+      fs::remove_all(dir);
+    }
   }
   std::printf("\n  ],\n  \"met\": %d,\n  \"shapes_run\": %d\n}\n", met, run);
   if (!keep) fs::remove_all(scratch);

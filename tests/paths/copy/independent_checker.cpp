@@ -350,9 +350,15 @@ PathResult check_path(const ClFile& cl, const ToolSpec& spec, const std::vector<
   for (std::size_t i = 1; i < tips.size(); ++i) {
     ++out.positions;
     const double allowed = cl.rapid[i] ? 1e-6 : tolerance + 1e-6;
-    const Deepest c = deepest_in_move(tool, cloud_grid, tips[i - 1], tips[i]);
-    const Deepest t = deepest_in_move(tool, truth_grid, tips[i - 1], tips[i]);
-    const Deepest e = near_edge.empty() ? Deepest{} : deepest_in_move(tool, edge_grid, tips[i - 1], tips[i]);
+    // A rapid leaving a cut starts where the cut left the tool, up to Tu deep (judged with the cut):
+    // it is judged from where it has moved Tu on, so a retract straight out of the contact passes and
+    // a rapid that stays in the material does not.
+    Eigen::Vector3d start = tips[i - 1];
+    const double length = (tips[i] - start).norm();
+    if (cl.rapid[i] && i > 1 && !cl.rapid[i - 1] && length > 0) start += (tips[i] - start) * std::min(1.0, tolerance / length);
+    const Deepest c = deepest_in_move(tool, cloud_grid, start, tips[i]);
+    const Deepest t = deepest_in_move(tool, truth_grid, start, tips[i]);
+    const Deepest e = near_edge.empty() ? Deepest{} : deepest_in_move(tool, edge_grid, start, tips[i]);
     if (e.depth > (cl.rapid[i] ? 1e-6 : edge_tolerance + 1e-6)) ++out.over_edge;
     if (e.depth > out.deepest_at_edge) out.deepest_at_edge = e.depth, out.worst_edge_part = frame.transpose() * e.frame_point;
     if ((c.depth > allowed || t.depth > allowed) && out.first_over.empty()) {

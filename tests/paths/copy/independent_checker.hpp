@@ -71,7 +71,8 @@ struct PathResult {
 };
 
 // How deep the tool swept along `cl` goes into `cloud` and `truth` (part frame): a move is over when
-// some point stands deeper than `tolerance` inside it (cuts and links) or inside it at all (rapids).
+// some point stands deeper than `tolerance` inside it (cuts and links) or inside it at all (rapids;
+// a rapid leaving a cut is judged once it has moved `tolerance` away from the cut's end).
 // True points within `edge_radius` of an `edge` point (where a scan ends and the part's edge lies
 // somewhere in the next gap) are judged apart: `deepest_at_edge`, moves over `edge_tolerance`.
 PathResult check_path(const ClFile& cl, const ToolSpec& tool, const std::vector<Eigen::Vector3d>& cloud, const std::vector<Eigen::Vector3d>& truth, double tolerance,
