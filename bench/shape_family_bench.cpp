@@ -69,6 +69,9 @@ int main(int argc, char** argv) {
       const checker::PathResult r = checker::check_path(finishing.back(), ball, truth.scan, truth.solid, kTu, shape.open_edge, truth.edge_band, kTu + truth.edge_allowance);
       if (r.deepest_truth > deepest_truth) worst_truth = r.worst_truth_part;
       deepest_cloud = std::max(deepest_cloud, r.deepest_cloud), deepest_truth = std::max(deepest_truth, r.deepest_truth);
+      if (r.deepest_at_edge > deepest_edge && r.deepest_at_edge > kTu + truth.edge_allowance)
+        std::fprintf(stderr, "%s, packet %d: %.4f mm at the open edge, true point (%.3f, %.3f, %.3f)\n", shape.name.c_str(), p + 1, r.deepest_at_edge, r.worst_edge_part.x(), r.worst_edge_part.y(),
+                     r.worst_edge_part.z());
       deepest_edge = std::max(deepest_edge, r.deepest_at_edge);
       if (r.over_cloud > 0 && over == 0) std::fprintf(stderr, "%s, packet %d: %s\n", shape.name.c_str(), p + 1, r.first_over.c_str());
       over += r.over_cloud;  // rapids leaving a cut node inherit its depth in the truth: judged by the deepest

@@ -13,7 +13,10 @@
 // cell has at most 65 % of a typical cell's neighbours and their centroid stands off by 20 %. Each
 // rim cell then gives its outermost scanned point (the farthest along the gap's
 // bisector), so the side stands under the scanned edge itself, not half a cell inside it. A cloud
-// that closes on itself (a ball on a neck down to the table) has its rim on the table only.
+// that closes on itself (a ball on a neck down to the table) has its rim on the table only. Rim
+// points up to two neighbour radii apart are linked too when the edge runs between them (outward
+// directions within 60°, the line between them within 60° of square to both): on a scan at random a
+// cell at the edge may not read as a rim cell, and a break in the chain left the side with a gap.
 //
 // The side. The scan's last points are not the part's edge: the edge lies somewhere in the next gap
 // (a scanner's grid ends within a spacing of it; points at random, within 2.5 spacings in all but
