@@ -33,7 +33,7 @@
 namespace drom::paths {
 
 struct PacketSettings {
-  double coverage = 0.99;  // pa, of the machinable points (the seed's 95 %; leftovers are re-attached after)
+  double coverage = 0.99;  // pa, of the machinable points (issue 45's check; the seed used 95 %); leftovers are re-attached after
   int max_packets = 6;     // np_max
   int min_points = 1;      // nv_min: a direction seeing fewer points is not a candidate
   double cone_middle = 42.5;  // degrees: overlap points go to the direction nearest this angle from their normal
