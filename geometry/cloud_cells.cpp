@@ -152,7 +152,7 @@ double TwoPlanes::line_uncertainty(const Eigen::Vector3d& x) const {
   return residual * std::sqrt(leverage(plane_a, count_a, x) + leverage(plane_b, count_b, x)) / sine;
 }
 
-TwoPlanes fit_two_planes(std::span<const Eigen::Vector3d> q, const LocalPlane& frame, double reach, double flat, double smooth) {
+TwoPlanes fit_two_planes(std::span<const Eigen::Vector3d> q, const LocalPlane& frame, double reach, double flat, double smooth, double share) {
   TwoPlanes out;
   if (q.size() < 16) return out;
   double best = std::numeric_limits<double>::infinity();
@@ -179,7 +179,7 @@ TwoPlanes fit_two_planes(std::span<const Eigen::Vector3d> q, const LocalPlane& f
     if (!(rms < best)) break;
     best = rms, a = pa, b = pb;
   }
-  if (!(best <= flat) || !(best < 0.5 * smooth)) return out;
+  if (!(best <= flat) || !(best < share * smooth)) return out;
   if (std::abs(a.normal.dot(b.normal)) > std::cos(15 * std::numbers::pi / 180)) return out;  // nearly one plane
   // The planes fitted once more without the points near both (within three residuals): under noise
   // those go to whichever plane they happen to be nearer, each plane gets the other's low points near

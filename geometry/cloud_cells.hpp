@@ -66,8 +66,8 @@ double safe_lift_deviations(std::size_t fits);
 // Two planes meeting on a line: a sharp crease. Found by splitting the points along eight directions
 // in their plane at five offsets (the split that leaves the least residual), then each point given to
 // the plane it is nearer and both refitted. Found when both are flat to `flat` (residual standard
-// deviation, mm), flatter than half the quadric's residual `smooth`, and 15° or more apart; then
-// each refitted without the points near both, which noise would give to either.
+// deviation, mm), flatter than `share` of the quadric's residual `smooth` (half by default), and 15°
+// or more apart; then each refitted without the points near both, which noise would give to either.
 struct TwoPlanes {
   bool found = false;
   Eigen::Vector3d normal_a = Eigen::Vector3d::UnitZ(), point_a = Eigen::Vector3d::Zero();
@@ -80,7 +80,7 @@ struct TwoPlanes {
   // there (its offset and its tilt, by least squares' leverage) over the sine of the planes' angle.
   double line_uncertainty(const Eigen::Vector3d& x) const;
 };
-TwoPlanes fit_two_planes(std::span<const Eigen::Vector3d> points, const LocalPlane& frame, double reach, double flat, double smooth);
+TwoPlanes fit_two_planes(std::span<const Eigen::Vector3d> points, const LocalPlane& frame, double reach, double flat, double smooth, double share = 0.5);
 
 // The surface a neighbourhood of scanned points describes, for putting points where the scan has
 // none: a quadric over their plane; where a sharp crease runs through them, two planes, each on its

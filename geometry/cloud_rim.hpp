@@ -10,7 +10,10 @@
 // `gap` degrees around it: an inner point is surrounded, a border point has a half-plane free (180°),
 // a corner more; or when, the neighbourhood not being a plane (a sharp crest's end at the rim), the
 // neighbours' centroid stands off to one side in their plane by more than 30 % of the radius, or the
-// cell has at most 65 % of a typical cell's neighbours and their centroid stands off by 20 %. Each
+// cell has at most 65 % of a typical cell's neighbours and their centroid stands off by 20 %; and in
+// every case when the scan's own points agree: a disc of the neighbourhood's radius just beyond the
+// cell (along its outward direction or up to 60° off it) holds under a quarter of the points about
+// it (the cells read a curved scan at random unevenly, and a cell amid it may look like an edge). Each
 // rim cell then gives its outermost scanned point (the farthest along the gap's
 // bisector), so the side stands under the scanned edge itself, not half a cell inside it. A cloud
 // that closes on itself (a ball on a neck down to the table) has its rim on the table only. Rim
@@ -25,7 +28,8 @@
 // where its top continues the sheet, flat: on the scanned sheet the tool stays as low as before (no
 // stock), and it does not roll over the scanned edge and round off the part's true edge beyond it.
 // Vertical lines (the part frame's -Z, the table's normal) from there, and from points every `spacing`
-// along the rim between neighbouring rim points, go down to the base's top, every `spacing` mm: a
+// along the rim between neighbouring rim points (where two of them are more than 45° apart in
+// height, as high as the higher: the corner at a step's end), go down to the base's top, every `spacing` mm: a
 // wall of points dense enough that a ball of radius r dips between them by at most
 // r - sqrt(r^2 - spacing^2 / 2). The strip between the rim and the side is filled the same way.
 #include "geometry/cloud_cells.hpp"
