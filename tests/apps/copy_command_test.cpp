@@ -4,6 +4,7 @@
 #include "dome_cloud.hpp"
 #include "drom_process.hpp"
 #include "tests/machine/shop_safe_program.hpp"
+#include "tests/scratch_folder.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -21,7 +22,7 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path root() {
-  const fs::path r = fs::temp_directory_path() / ("drom_copy_command_" + std::to_string(::getpid()));
+  const fs::path r = drom::tests::scratch_folder("drom_copy_command_");
   fs::create_directories(r);
   return r;
 }

@@ -5,6 +5,7 @@
 #include "drom_process.hpp"
 #include "support/file_integrity.hpp"
 #include "support/input_error.hpp"
+#include "tests/scratch_folder.hpp"
 
 #include <gtest/gtest.h>
 
@@ -39,7 +40,7 @@ const std::vector<std::string> kCoarse = {"--set", "mesh.nx=5", "--set", "mesh.n
                                           "--set", "clamps.0.box=[0,200,0,200]", "--set", "clamps.1.box=[800,1000,0,200]", "--set",
                                           "clamps.2.box=[0,200,800,1000]", "--set", "clamps.3.box=[800,1000,800,1000]"};
 
-fs::path root() { return fs::temp_directory_path() / ("drom_fault_tests_" + std::to_string(::getpid())); }
+fs::path root() { return drom::tests::scratch_folder("drom_fault_tests_"); }
 
 std::vector<std::string> args(const std::string& command, const fs::path& out, std::vector<std::string> more = {}) {
   std::vector<std::string> a = {command};

@@ -3,6 +3,7 @@
 // run resumes from its finished K; bad input exits with code 2 naming the file, line and key.
 #include "drom_process.hpp"
 #include "tests/machine/shop_safe_program.hpp"
+#include "tests/scratch_folder.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -18,7 +19,7 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path root() {
-  const fs::path r = fs::temp_directory_path() / ("drom_finish_command_" + std::to_string(::getpid()));
+  const fs::path r = drom::tests::scratch_folder("drom_finish_command_");
   fs::create_directories(r);
   return r;
 }

@@ -1,6 +1,7 @@
 // drom machine end to end: a 3-axis program and a 5-axis CL file checked, their outputs written,
 // and bad programs or machines refused with exit code 2 and the file, line and key.
 #include "drom_process.hpp"
+#include "tests/scratch_folder.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -16,7 +17,7 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path root() {
-  const fs::path r = fs::temp_directory_path() / ("drom_machine_command_" + std::to_string(::getpid()));
+  const fs::path r = drom::tests::scratch_folder("drom_machine_command_");
   fs::create_directories(r);
   return r;
 }

@@ -4,6 +4,7 @@
 // A result beyond a stroke exits 3 with no runnable program.
 #include "drom_process.hpp"
 #include "tests/machine/shop_safe_program.hpp"
+#include "tests/scratch_folder.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -18,7 +19,7 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path root() {
-  const fs::path r = fs::temp_directory_path() / ("drom_orient_command_" + std::to_string(::getpid()));
+  const fs::path r = drom::tests::scratch_folder("drom_orient_command_");
   fs::create_directories(r);
   return r;
 }

@@ -4,6 +4,7 @@
 #include "geometry/step_face.hpp"
 #include "support/input_error.hpp"
 #include "tests/geometry/test_surfaces.hpp"
+#include "tests/scratch_folder.hpp"
 
 #include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
@@ -35,7 +36,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("drom_step_test_" + std::to_string(::getpid()));
+  const fs::path dir = drom::tests::scratch_folder("drom_step_test_");
   fs::create_directories(dir);
   return dir / name;
 }

@@ -11,6 +11,7 @@
 // One shape per kind runs here; bench/shape_family_bench runs as many as asked and reports which
 // meet the checks (docs/clouds.md §6 lists the family of 35 and what still falls short).
 #include "tests/paths/copy/shape_judging.hpp"
+#include "tests/scratch_folder.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -26,7 +27,7 @@ using namespace drom::tests;
 namespace {
 
 fs::path scratch(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / ("drom_shape_family_" + std::to_string(::getpid())) / name;
+  const fs::path p = drom::tests::scratch_folder("drom_shape_family_") / name;
   fs::create_directories(p);
   return p;
 }

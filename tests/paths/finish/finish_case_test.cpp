@@ -3,6 +3,7 @@
 // range, an orientation that undercuts the surface; and the shipped cases read.
 #include "paths/finish/finish_case.hpp"
 #include "support/input_error.hpp"
+#include "tests/scratch_folder.hpp"
 
 #include <gtest/gtest.h>
 
@@ -14,7 +15,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path write_case(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / ("drom_finish_case_" + std::to_string(::getpid()));
+  const fs::path dir = drom::tests::scratch_folder("drom_finish_case_");
   fs::create_directories(dir);
   std::ofstream(dir / name) << text;
   return dir / name;
