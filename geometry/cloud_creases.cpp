@@ -27,11 +27,12 @@ Creases crease_points(std::span<const Eigen::Vector3d> points, const ScanSurvey&
   // of radius r, a quadric misses faces meeting with slopes +-m about their bisector by 0.071 m r
   // (rms), and a ridge at 24 degrees under 0.072 mm of noise on a 0.25 mm grid (issue 45's ridge 4)
   // went unseen at 0.94 mm; the tool rode the points beside the crest, 0.061 mm under it. Where a cell
-  // shows nothing, its points within `wide` are read again: the radius at which faces meeting at 45
-  // degrees stand one noise deviation off the quadric. There the quadric's residual is not held to the
+  // shows nothing, its points within `wide` are read again: the radius at which faces meeting at 30
+  // degrees stand one noise deviation off the quadric (at 45 degrees a ridge at 15 degrees under 0.032
+  // mm of noise went unseen, 0.013 mm cut). There the quadric's residual is not held to the
   // noise's (a deviation is all it stands off) but the two planes must leave less than it by five of
   // the residual ratio's own deviations (1 / sqrt(2 n) over n points).
-  const double wide = noise / (0.071 * std::tan(22.5 * std::numbers::pi / 180));
+  const double wide = noise / (0.071 * std::tan(15 * std::numbers::pi / 180));
   const bool look_wider = wide > 2.5 * out.cell;
   std::vector<std::vector<Eigen::Vector3d>> found(cells.centroids.size());
   tbb::parallel_for(std::size_t(0), cells.centroids.size(), [&](std::size_t i) {

@@ -6,6 +6,7 @@
 #include "geometry/cloud_kdtree.hpp"
 #include "geometry/cloud_holes.hpp"
 #include "geometry/cloud_noise.hpp"
+#include "geometry/cloud_noise_floor.hpp"
 #include "geometry/cloud_rim.hpp"
 #include "geometry/cloud_voxel_map.hpp"
 #include "machine/feed_prediction.hpp"
@@ -123,19 +124,21 @@ std::vector<Eigen::Vector3d> find_sides(const geometry::PointCloud& cloud, const
 }
 
 // Stage 0b: the scan completed where a tool would otherwise cut below the surface its points
-// describe: its sharp creases' lines (geometry/cloud_creases.hpp) and points in its holes
-// (geometry/cloud_holes.hpp). They are part of the scan for the tool to rest on (after the scan's own
+// describe: its sharp creases' lines (geometry/cloud_creases.hpp), points in its holes
+// (geometry/cloud_holes.hpp) and, under noise, its fitted surface lifted (geometry/cloud_noise_floor.hpp). They are part of the scan for the tool to rest on (after the scan's own
 // points in the collision set), not rows: normals, visibility and packets stay the scan's own.
 std::vector<Eigen::Vector3d> complete(const geometry::PointCloud& cloud, const geometry::ScanSurvey& survey, const CopySettings& s, CopyResult& out, const Say& say) {
   if (!s.completion) return {};
   const geometry::Creases creases = geometry::crease_points(cloud.points, survey, out.noise, out.obstacle_spacing);
   const geometry::FilledHoles holes = geometry::fill_holes(cloud.points, survey, out.hole_radius, out.noise);
+  const geometry::NoiseFloor floor = geometry::noise_floor(cloud.points, survey, out.noise);
   out.crease_points = creases.points.size(), out.crease_cells = creases.cells, out.hole_points = holes.points.size();
-  for (const auto* added : {&creases.points, &holes.points}) out.completion.insert(out.completion.end(), added->begin(), added->end());
+  out.noise_floor_points = floor.points.size(), out.noise_floor_deviations = floor.deviations;
+  for (const auto* added : {&creases.points, &holes.points, &floor.points}) out.completion.insert(out.completion.end(), added->begin(), added->end());
   if (!out.completion.empty())
     say("completion: " + std::to_string(out.crease_points) + " points on " + std::to_string(out.crease_cells) + " cells' creases, " + std::to_string(out.hole_points) +
         " in holes wider than " + std::to_string(out.hole_radius).substr(0, 5) + " mm (spacing " + std::to_string(holes.spacing).substr(0, 5) + " mm, 90 % under " +
-        std::to_string(holes.spacing_p90).substr(0, 5) + ")");
+        std::to_string(holes.spacing_p90).substr(0, 5) + "), " + std::to_string(out.noise_floor_points) + " on the noise's floor");
   return out.completion;
 }
 

@@ -65,6 +65,8 @@ struct CopyResult {
   double noise = 0;                           // the scan's noise (mm; geometry/cloud_noise.hpp)
   double spacing = 0, spacing_p90 = 0;        // the scan's typical spacing and its 90th percentile (mm)
   std::size_t crease_points = 0, crease_cells = 0, hole_points = 0;  // the completion's points (after the scan's, before the side)
+  std::size_t noise_floor_points = 0;  // the completion's points above the noise (in pairs)
+  double noise_floor_deviations = 0;   // their lift, in their fits' deviations
   std::vector<Eigen::Vector3d> completion, side;  // the points added to the scan, and the part's side (part frame)
   PointNormals normals;                       // the rows: points with a normal
   std::vector<Eigen::Vector3d> row_points, row_normals;

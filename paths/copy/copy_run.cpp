@@ -234,7 +234,7 @@ nlohmann::json scan_summary(const geometry::PointCloud& cloud, const geometry::F
           {"typical_spacing_mm", r.spacing > 0 ? r.spacing : r.rim.spacing},
           {"spacing_p90_mm", r.spacing_p90},
           {"noise_mm", r.noise},
-          {"completion", {{"crease_points", r.crease_points}, {"crease_cells", r.crease_cells}, {"hole_points", r.hole_points}, {"hole_radius_mm", r.hole_radius}}},
+          {"completion", {{"crease_points", r.crease_points}, {"crease_cells", r.crease_cells}, {"hole_points", r.hole_points}, {"hole_radius_mm", r.hole_radius}, {"noise_floor_points", r.noise_floor_points}, {"noise_floor_lift_deviations", r.noise_floor_deviations}}},
           {"coverage_of_points_kept", share(r.packets.covered, cloud.size())},
           {"coverage_of_points_with_normal", share(r.packets.covered, r.row_points.size())}};
 }
