@@ -23,15 +23,16 @@ struct Surface {
   double (*height)(double, double);
 };
 
-// Points at random over [-12, 12]^2, noise along z.
+// Points at random over [-12, 12]^2 (where the surface is), noise along z.
 std::vector<Eigen::Vector3d> scan(const Surface& s, double spacing, double noise, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-12, 12);
   std::normal_distribution<double> n(0, noise > 0 ? noise : 1);
   std::vector<Eigen::Vector3d> points;
   for (int i = 0; i < static_cast<int>(24 * 24 / (spacing * spacing)); ++i) {
-    const double x = u(rng), y = u(rng);
-    points.emplace_back(x, y, s.height(x, y) + (noise > 0 ? n(rng) : 0.0));
+    const double x = u(rng), y = u(rng), z = s.height(x, y);
+    if (!std::isfinite(z)) continue;  // beyond the ball's silhouette
+    points.emplace_back(x, y, z + (noise > 0 ? n(rng) : 0.0));
   }
   return points;
 }
