@@ -228,6 +228,7 @@ LocalSurface::LocalSurface(std::span<const Eigen::Vector3d> q, double flat, int 
     reach = std::max(reach, g.norm());
   }
   const double smooth = fit_quadric(q, frame_, &quadric_);
+  residual_ = smooth;
   if (smooth <= flat) {
     kind_ = Kind::quadric;
     return;

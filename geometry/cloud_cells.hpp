@@ -103,6 +103,8 @@ class LocalSurface {
   // neighbourhood (about 6 / n amid the points, more towards their edge, above 1 beyond them).
   double leverage(const Eigen::Vector2d& uv) const;
   // How far the neighbourhood's points stand off its plane, lowest and highest.
+  // What the quadric leaves over the neighbourhood (residual standard deviation, mm).
+  double residual() const { return residual_; }
   double lowest() const { return lowest_; }
   double highest() const { return highest_; }
 
@@ -113,7 +115,7 @@ class LocalSurface {
   Eigen::Matrix<double, 6, 6> normal_ = Eigen::Matrix<double, 6, 6>::Identity();
   TwoPlanes two_;
   Eigen::Vector2d line_uv_ = Eigen::Vector2d::Zero(), line_dir_ = Eigen::Vector2d::UnitX();
-  double side_a_ = 1, lowest_ = 0, highest_ = 0;
+  double side_a_ = 1, lowest_ = 0, highest_ = 0, residual_ = 0;
 };
 
 }  // namespace drom::geometry

@@ -40,7 +40,7 @@ NoiseFloor noise_floor(std::span<const Eigen::Vector3d> points, const ScanSurvey
     // The noise here: the scan's (a median over it) or what this fit leaves, the larger. Noise along
     // a sensor's line of sight reads larger where the face looks at it (a ball's top under 0.01 mm
     // read 0.0077 over the whole ball, and the floor stood 0.004 mm under its top).
-    const double here = std::max(noise, fit_quadric(q, local.frame()));
+    const double here = std::max(noise, local.residual());
     fits[i] = {on, local.frame().normal, here * std::sqrt(leverage)};
   });
   for (const Fit& f : fits) out.fits += f.sd >= 0 ? 1 : 0;
