@@ -308,6 +308,24 @@ double LocalSurface::leverage(const Eigen::Vector2d& g) const {
   return x.dot(normal_.ldlt().solve(x));
 }
 
+std::optional<LocalSurface::Spot> LocalSurface::spot(const Eigen::Vector2d& g) const {
+  if (kind_ == Kind::quadric) {
+    const Eigen::Vector3d on = at(g);
+    if (!std::isfinite(on.x())) return std::nullopt;
+    return Spot{on, frame_.normal, leverage(g), residual_};
+  }
+  if (kind_ != Kind::crease) return std::nullopt;
+  const Eigen::Vector3d on = at(g);
+  if (!std::isfinite(on.x())) return std::nullopt;
+  // The side whose plane holds `on`; a point on the line (the spot fell past it) belongs to neither.
+  const double da = std::abs(two_.normal_a.dot(on - two_.point_a)), db = std::abs(two_.normal_b.dot(on - two_.point_b));
+  const bool on_a = da <= db;
+  const Eigen::Vector3d off_line = (on - two_.line_point) - (on - two_.line_point).dot(two_.line_direction) * two_.line_direction;
+  if (off_line.norm() < 1e-9) return std::nullopt;
+  return on_a ? Spot{on, two_.normal_a, geometry::leverage(two_.plane_a, two_.count_a, on), two_.residual}
+              : Spot{on, two_.normal_b, geometry::leverage(two_.plane_b, two_.count_b, on), two_.residual};
+}
+
 double safe_lift_deviations(std::size_t fits) {
   // The one-sided tail 0.5 erfc(z / sqrt 2) = 1 / (10 fits), by bisection (erfc falls monotonically).
   const double tail = 1 / (10.0 * static_cast<double>(std::max<std::size_t>(fits, 1)));

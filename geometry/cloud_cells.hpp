@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -105,6 +106,15 @@ class LocalSurface {
   // How far the neighbourhood's points stand off its plane, lowest and highest.
   // What the quadric leaves over the neighbourhood (residual standard deviation, mm).
   double residual() const { return residual_; }
+  // The model over a spot, for standing a floor on it: the surface point, the normal its height is
+  // measured along, that height's variance over the noise's (the quadric's leverage; at a crease, the
+  // spot's side's plane's) and what the model leaves of its points (mm). None where the model was not
+  // fitted over the spot: no model, a face's few points, or a crease's spot past its side's line.
+  struct Spot {
+    Eigen::Vector3d on, normal;
+    double leverage = 0, residual = 0;
+  };
+  std::optional<Spot> spot(const Eigen::Vector2d& uv) const;
   double lowest() const { return lowest_; }
   double highest() const { return highest_; }
 

@@ -30,18 +30,19 @@ NoiseFloor noise_floor(std::span<const Eigen::Vector3d> points, const ScanSurvey
     q.reserve(near.size());
     for (const int j : near) q.push_back(points[static_cast<std::size_t>(j)]);
     const LocalSurface local(q, smooth);
-    if (local.kind() != LocalSurface::Kind::quadric) return;
+    // A quadric, or beside a crease (where the 40 straddle it and no quadric fits) the plane of the
+    // point's own side: a ridge's flank 0.3 mm from its crest had no floor, and the ball resting on the
+    // crest's line and the flank's low points went 0.013 mm into the flank (issue 45, seed 4242).
     const Eigen::Vector2d at = local.uv(points[i]);
-    const double leverage = local.leverage(at);
+    const std::optional<LocalSurface::Spot> spot = local.spot(at);
+    if (!spot) return;
     // The point amid its neighbours (at a rim they all lie to one side, and the fit extrapolates).
-    if (!(leverage <= 1)) return;
-    const Eigen::Vector3d on = local.at(at);
-    if (!std::isfinite(on.x())) return;
+    if (!(spot->leverage <= 1)) return;
     // The noise here: the scan's (a median over it) or what this fit leaves, the larger. Noise along
     // a sensor's line of sight reads larger where the face looks at it (a ball's top under 0.01 mm
     // read 0.0077 over the whole ball, and the floor stood 0.004 mm under its top).
-    const double here = std::max(noise, local.residual());
-    fits[i] = {on, local.frame().normal, here * std::sqrt(leverage)};
+    const double here = std::max(noise, spot->residual);
+    fits[i] = {spot->on, spot->normal, here * std::sqrt(spot->leverage)};
   });
   for (const Fit& f : fits) out.fits += f.sd >= 0 ? 1 : 0;
   // The lift is set so that the lowest of the fits stays above the surface (geometry/cloud_cells.hpp).

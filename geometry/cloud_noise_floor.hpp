@@ -4,7 +4,8 @@
 // surface by about a deviation of the noise: 0.017 mm on a cap scanned under 0.027 mm of noise, 0.046
 // mm on a neck under 0.046, where the tolerance is 0.01. Each point's 40 nearest are fitted with a
 // quadric (where they make a smooth face: no more residual than 1.3 deviations of the noise and 2 µm),
-// and the fit at the point itself is put a safe number of its own deviations above and below it
+// or, where they straddle a sharp crease, with two planes (geometry/cloud_cells.hpp's LocalSurface,
+// the point's own side's plane counting), and the fit at the point itself is put a safe number of its own deviations above and below it
 // (one of them inside the part, where it changes nothing): the fit averages the noise, and the lifted
 // point stands above the true surface but where the fit is out by more than that. The tool then rests
 // on the higher of the scan and this floor, and leaves stock of about 1.5 noise deviations rather than

@@ -182,6 +182,7 @@ CloudRim find_rim(std::span<const Eigen::Vector3d> points, double spacing, const
   // edge may be (a lone fragment's, whose outward is unknown, stays where it is).
   rim.edge.resize(rim.points.size());
   rim.strip.resize(rim.points.size());
+  rim.faces.resize(rim.points.size());
   const double flat = flat_face_residual(noise);
   tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
     const int r = rim_index[i];
@@ -201,6 +202,9 @@ CloudRim find_rim(std::span<const Eigen::Vector3d> points, double spacing, const
     const std::size_t stride = std::max<std::size_t>(1, all.size() / 400);
     for (std::size_t m = 0; m < all.size(); m += stride) q.push_back(points[static_cast<std::size_t>(all[m])]);
     const LocalSurface local(q, flat);
+    const auto upward = [](const Eigen::Vector3d& v) { return v.z() >= 0 ? v : Eigen::Vector3d(-v); };
+    if (local.kind() == LocalSurface::Kind::crease) rim.faces[k] = {upward(local.crease().normal_a), upward(local.crease().normal_b)};
+    else if (local.kind() != LocalSurface::Kind::none) rim.faces[k] = {upward(local.frame().normal)};
     const auto straight = [&](double t) { return rim.points[k] + t * rim.outward[k]; };
     Eigen::Vector2d from = local.uv(rim.points[k]), out(rim.outward[k].dot(local.frame().u), rim.outward[k].dot(local.frame().v));
     const bool on_surface = local.kind() != LocalSurface::Kind::none && out.norm() > 0.5;
@@ -230,14 +234,28 @@ CloudRim find_rim(std::span<const Eigen::Vector3d> points, double spacing, const
 namespace {
 
 // A point of the side's top between two neighbouring rim points: on the straight line between them,
-// but as high as the higher one where the line rises more than it runs (steeper than 45°). There the
-// rim turns a corner the straight line cuts: up a step's wall at its end, then along the upper level,
-// the true edge stands at the upper level right past the wall, and the line ran 0.4 mm under it, where
-// a ball tilted 20° towards the edge went down 0.12 mm into the part (issue 45's step 1). Along a
-// gently sloping edge the line stays.
-Eigen::Vector3d between(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double t) {
+// but as high as the higher one where the line rises more than it runs (steeper than 45°) and more
+// than twice as fast as any face of the higher one falls along it. There the rim turns a corner the
+// straight line cuts: up a step's wall at its end, then along the upper level, the true edge stands at
+// the upper level right past the wall, and the line ran 0.4 mm under it, where a ball tilted 20°
+// towards the edge went down 0.12 mm into the part (issue 45's step 1). Along a steep flank's straight
+// edge the line lies on the flank, the flank's face falls along it as fast, and the line stays (a
+// ridge at 47° raised its side's top a link's rise above its open edges, and the tool kept 1.9 mm off
+// them, issue 45's seed 4242). A rim point with no face fitted counts as a corner.
+Eigen::Vector3d between(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const std::vector<Eigen::Vector3d>& faces_a, const std::vector<Eigen::Vector3d>& faces_b, double t) {
   Eigen::Vector3d p = a + (b - a) * t;
-  if (std::abs(b.z() - a.z()) > std::hypot(b.x() - a.x(), b.y() - a.y())) p.z() = std::max(a.z(), b.z());
+  const double rise = std::abs(b.z() - a.z()), run = std::hypot(b.x() - a.x(), b.y() - a.y());
+  if (!(rise > run)) return p;
+  const bool b_higher = b.z() >= a.z();
+  const Eigen::Vector3d& high = b_higher ? b : a;
+  const Eigen::Vector3d& low = b_higher ? a : b;
+  for (const Eigen::Vector3d& n : b_higher ? faces_b : faces_a) {
+    // How far the face's plane through the higher point falls over the run to the lower one.
+    if (!(n.z() > 0.1)) continue;
+    const double falls = (n.x() * (low.x() - high.x()) + n.y() * (low.y() - high.y())) / n.z();
+    if (2 * falls >= rise) return p;
+  }
+  p.z() = high.z();
   return p;
 }
 
@@ -258,11 +276,14 @@ std::vector<Eigen::Vector3d> side_points(const CloudRim& rim, double base_top, d
     if (!fresh && p.z() > it->second.z()) it->second = p;
   };
   const std::vector<Eigen::Vector3d>& edge = rim.edge;
+  // A rim assembled by hand may carry no faces: its steep links count as corners.
+  static const std::vector<Eigen::Vector3d> no_face;
+  const auto faces = [&](int i) -> const std::vector<Eigen::Vector3d>& { return static_cast<std::size_t>(i) < rim.faces.size() ? rim.faces[static_cast<std::size_t>(i)] : no_face; };
   for (const auto& p : edge) offer(p);
   for (const auto& [i, j] : rim.links) {
     const Eigen::Vector3d &a = edge[static_cast<std::size_t>(i)], &b = edge[static_cast<std::size_t>(j)];
     const int n = static_cast<int>(std::ceil((b - a).norm() / spacing));
-    for (int k = 1; k < n; ++k) offer(between(a, b, static_cast<double>(k) / n));
+    for (int k = 1; k < n; ++k) offer(between(a, b, faces(i), faces(j), static_cast<double>(k) / n));
   }
   std::vector<Eigen::Vector3d> ordered;
   ordered.reserve(tops.size());
@@ -289,7 +310,7 @@ std::vector<Eigen::Vector3d> side_points(const CloudRim& rim, double base_top, d
     const auto &a = rim.strip[static_cast<std::size_t>(i)], &b = rim.strip[static_cast<std::size_t>(j)];
     for (std::size_t m = 0; m < std::min(a.size(), b.size()); ++m) {
       const int n = static_cast<int>(std::ceil((b[m] - a[m]).norm() / spacing));
-      for (int t = 1; t < n; ++t) keep(between(a[m], b[m], static_cast<double>(t) / n));
+      for (int t = 1; t < n; ++t) keep(between(a[m], b[m], faces(i), faces(j), static_cast<double>(t) / n));
     }
   }
   return out;

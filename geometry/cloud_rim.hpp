@@ -28,8 +28,9 @@
 // where its top continues the sheet, flat: on the scanned sheet the tool stays as low as before (no
 // stock), and it does not roll over the scanned edge and round off the part's true edge beyond it.
 // Vertical lines (the part frame's -Z, the table's normal) from there, and from points every `spacing`
-// along the rim between neighbouring rim points (where two of them are more than 45° apart in
-// height, as high as the higher: the corner at a step's end), go down to the base's top, every `spacing` mm: a
+// along the rim between neighbouring rim points (as high as the higher where the line between them
+// rises more than it runs and more than twice what the higher one's faces rise along it: the corner at
+// a step's end, not a steep flank's straight edge), go down to the base's top, every `spacing` mm: a
 // wall of points dense enough that a ball of radius r dips between them by at most
 // r - sqrt(r^2 - spacing^2 / 2). The strip between the rim and the side is filled the same way.
 #include "geometry/cloud_cells.hpp"
@@ -48,6 +49,9 @@ struct CloudRim {
   std::vector<double> gap;               // the free angle around each (rad): pi on a straight edge, more at a corner
   std::vector<Eigen::Vector3d> edge;     // where the side stands: the sheet continued from each rim point
   std::vector<std::vector<Eigen::Vector3d>> strip;  // per rim point: the sheet continued out to its edge, every spacing
+  // Per rim point: the normals (z >= 0) of the faces its cell's surface shows, one on a smooth face, two
+  // at a crease, none where no surface was fitted.
+  std::vector<std::vector<Eigen::Vector3d>> faces;
   std::vector<std::pair<int, int>> links;  // neighbouring rim points (i < j)
   double cell = 0;                       // the thinning cell, mm
   double spacing = 0;                    // the scan's typical spacing the cell came from, mm

@@ -7,7 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -81,5 +83,59 @@ TEST(CloudRim, ABallScannedAtRandomHasItsRimOnlyWhereItIsOpen) {
     for (const auto& p : rim.points) (p.z() < cut + 2.5 * rim.cell ? at_the_cut : elsewhere) += 1;
     EXPECT_EQ(elsewhere, 0);
     EXPECT_GT(at_the_cut, static_cast<int>(2 * 3.14159265 * std::sqrt(radius * radius - cut * cut) / (2.5 * rim.cell)));
+  }
+}
+
+namespace {
+
+// A sheet scanned on a grid (a laser line scanner), `height` over [-8, 8] x [-10, 10] (the columns
+// `shift` off x = 0), with the points of a wall at x = 0 where the height jumps there.
+std::vector<Eigen::Vector3d> grid_scan(double (*height)(double), double spacing, double shift) {
+  std::vector<Eigen::Vector3d> points;
+  for (double x = -8 + shift; x <= 8 + 1e-9; x += spacing)
+    for (double y = -10; y <= 10 + 1e-9; y += spacing) points.emplace_back(x, y, height(x));
+  const double low = height(-1e-9), high = height(0);
+  for (double z = low + spacing; z < high; z += spacing)
+    for (double y = -10; y <= 10 + 1e-9; y += spacing) points.emplace_back(0, y, z);
+  return points;
+}
+
+double flank(double x) { return 20 + std::tan(50 * 3.14159265358979 / 180) * x; }
+double step(double x) { return x >= 0 ? 11.0 : 5.0; }
+
+}  // namespace
+
+// Where the rim runs up a steep flank in a straight line, the side's top follows it: a flank at 50°
+// had its side's top raised to the higher end of every link (0.4 mm over the edge) and the tool kept
+// 1.9 mm off the open edge (issue 45's seed 4242, ridge 3 at 47°, 98 % covered). Where it turns the
+// corner at a step's end (up the wall, then along the upper level), the side's top stands at the upper
+// level right past the wall (issue 45's step 1: the straight line ran 0.4 mm under it).
+TEST(CloudRim, TheSideFollowsASteepFlanksEdgeAndTurnsAStepsCorner) {
+  {
+    const auto points = grid_scan(flank, 0.25, 0);
+    const drom::geometry::CloudRim rim = drom::geometry::find_rim(points, 0.0, 0.17);
+    const std::vector<Eigen::Vector3d> side = drom::geometry::side_points(rim, 0.0, 0.17);
+    double highest = -1e9;
+    int counted = 0;
+    for (const auto& p : side)
+      if (std::abs(p.y()) > 10 && std::abs(p.x()) < 6) highest = std::max(highest, p.z() - flank(p.x())), ++counted;
+    ASSERT_GT(counted, 100);
+    std::printf("  flank at 50 deg: the side's top at most %+.4f mm over the flank's edge\n", highest);
+    EXPECT_LT(highest, 0.05) << "the side's top stands over a steep flank's straight edge";
+  }
+  {
+    // Every 0.8 mm, the upper level's first column 0.3 mm past the wall, whose last point stands 0.4 mm
+    // under the upper level.
+    const auto points = grid_scan(step, 0.8, 0.3);
+    const drom::geometry::CloudRim rim = drom::geometry::find_rim(points, 0.0, 0.17);
+    const std::vector<Eigen::Vector3d> side = drom::geometry::side_points(rim, 0.0, 0.17);
+    // Past each of the wall's two ends, between the wall and the upper level's first column.
+    for (const double end : {-1.0, 1.0}) {
+      double highest = -1e9;
+      for (const auto& p : side)
+        if (end * p.y() > 10 && p.x() >= 0 && p.x() < 0.17) highest = std::max(highest, p.z());
+      std::printf("  step's end at y %+.0f: the side's top past the wall at z %.3f (the upper level at 11)\n", end * 10, highest);
+      EXPECT_GT(highest, 11 - 0.05) << "the side's top cuts the corner at the step's end";
+    }
   }
 }
