@@ -217,6 +217,7 @@ Eigen::Matrix<double, 6, 1> monomials(const Eigen::Vector2d& g) { return (Eigen:
 LocalSurface::LocalSurface(std::span<const Eigen::Vector3d> q, double flat, int own) {
   if (q.size() < 10) return;
   frame_ = fit_plane(q);
+  count_ = q.size();
   normal_.setZero();
   lowest_ = std::numeric_limits<double>::infinity(), highest_ = -lowest_;
   double reach = 0;
@@ -324,6 +325,11 @@ std::optional<LocalSurface::Spot> LocalSurface::spot(const Eigen::Vector2d& g) c
   if (off_line.norm() < 1e-9) return std::nullopt;
   return on_a ? Spot{on, two_.normal_a, geometry::leverage(two_.plane_a, two_.count_a, on), two_.residual}
               : Spot{on, two_.normal_b, geometry::leverage(two_.plane_b, two_.count_b, on), two_.residual};
+}
+
+LocalSurface::Spot LocalSurface::plane_spot(const Eigen::Vector2d& g) const {
+  const Eigen::Vector3d on = frame_.centroid + g.x() * frame_.u + g.y() * frame_.v;
+  return Spot{on, frame_.normal, geometry::leverage(frame_, count_, on), std::sqrt(std::max(0.0, frame_.spread[0]))};
 }
 
 double safe_lift_deviations(std::size_t fits) {

@@ -115,6 +115,9 @@ class LocalSurface {
     double leverage = 0, residual = 0;
   };
   std::optional<Spot> spot(const Eigen::Vector2d& uv) const;
+  // The neighbourhood's least-squares plane over the spot, the same way (its leverage by ordinary least
+  // squares over the neighbourhood's points, its residual theirs about it).
+  Spot plane_spot(const Eigen::Vector2d& uv) const;
   double lowest() const { return lowest_; }
   double highest() const { return highest_; }
 
@@ -126,6 +129,7 @@ class LocalSurface {
   TwoPlanes two_;
   Eigen::Vector2d line_uv_ = Eigen::Vector2d::Zero(), line_dir_ = Eigen::Vector2d::UnitX();
   double side_a_ = 1, lowest_ = 0, highest_ = 0, residual_ = 0;
+  std::size_t count_ = 0;
 };
 
 }  // namespace drom::geometry
