@@ -124,6 +124,15 @@ double fit_quadric(std::span<const Eigen::Vector3d> points, const LocalPlane& fr
 
 namespace {
 
+// The variance of a fitted plane's height at x per unit noise variance: 1/n at its centroid, growing
+// with the distance from it over the points' spread (ordinary least squares' leverage).
+double leverage(const LocalPlane& p, std::size_t n, const Eigen::Vector3d& x) {
+  const double count = static_cast<double>(std::max<std::size_t>(n, 1));
+  const Eigen::Vector3d d = x - p.centroid;
+  const double du = d.dot(p.u), dv = d.dot(p.v);
+  return (1 + du * du / std::max(p.spread[2], 1e-12) + dv * dv / std::max(p.spread[1], 1e-12)) / count;
+}
+
 struct PlaneFit {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::UnitZ();
   double sse = 0;
@@ -134,15 +143,6 @@ struct PlaneFit {
 PlaneFit plane_fit(const std::vector<Eigen::Vector3d>& q) {
   const LocalPlane l = fit_plane(q);
   return {l.centroid, l.normal, l.spread[0] * static_cast<double>(q.size()), l, q.size()};
-}
-
-// The variance of a fitted plane's height at x per unit noise variance: 1/n at its centroid, growing
-// with the distance from it over the points' spread (ordinary least squares' leverage).
-double leverage(const LocalPlane& p, std::size_t n, const Eigen::Vector3d& x) {
-  const double count = static_cast<double>(std::max<std::size_t>(n, 1));
-  const Eigen::Vector3d d = x - p.centroid;
-  const double du = d.dot(p.u), dv = d.dot(p.v);
-  return (1 + du * du / std::max(p.spread[2], 1e-12) + dv * dv / std::max(p.spread[1], 1e-12)) / count;
 }
 
 }  // namespace
@@ -170,14 +170,39 @@ TwoPlanes fit_two_planes(std::span<const Eigen::Vector3d> q, const LocalPlane& f
     }
   }
   // The split refined: each point to the plane it is nearer, both planes fitted again.
-  for (int round = 0; round < 4 && std::isfinite(best); ++round) {
-    std::vector<Eigen::Vector3d> qa, qb;
-    for (const auto& p : q) (std::abs(a.normal.dot(p - a.centroid)) <= std::abs(b.normal.dot(p - b.centroid)) ? qa : qb).push_back(p);
-    if (qa.size() < 5 || qb.size() < 5) break;
-    const PlaneFit pa = plane_fit(qa), pb = plane_fit(qb);
-    const double rms = std::sqrt((pa.sse + pb.sse) / static_cast<double>(q.size() - 6));
-    if (!(rms < best)) break;
-    best = rms, a = pa, b = pb;
+  const auto refine = [&] {
+    for (int round = 0; round < 4 && std::isfinite(best); ++round) {
+      std::vector<Eigen::Vector3d> qa, qb;
+      for (const auto& p : q) (std::abs(a.normal.dot(p - a.centroid)) <= std::abs(b.normal.dot(p - b.centroid)) ? qa : qb).push_back(p);
+      if (qa.size() < 5 || qb.size() < 5) break;
+      const PlaneFit pa = plane_fit(qa), pb = plane_fit(qb);
+      const double rms = std::sqrt((pa.sse + pb.sse) / static_cast<double>(q.size() - 6));
+      if (!(rms < best)) break;
+      best = rms, a = pa, b = pb;
+    }
+  };
+  refine();
+  // Where no straight line across the points' plane parts the two faces (a wall's top rows and the
+  // points of the face above near its edge overlap, seen along the plane of them all), each point's
+  // six nearest give a plane, and the points within `flat` of it one side. In a point's neighbourhood
+  // (64 points at most: the square of their count is paid), not over a crease search's hundreds.
+  if (!(best <= flat) && q.size() <= 64) {
+    const double before = best;
+    std::vector<std::pair<double, std::size_t>> by_distance(q.size());
+    for (std::size_t s = 0; s < q.size(); ++s) {
+      for (std::size_t r = 0; r < q.size(); ++r) by_distance[r] = {(q[r] - q[s]).squaredNorm(), r};
+      std::partial_sort(by_distance.begin(), by_distance.begin() + 6, by_distance.end());
+      std::vector<Eigen::Vector3d> patch;
+      for (std::size_t r = 0; r < 6; ++r) patch.push_back(q[by_distance[r].second]);
+      const LocalPlane seed = fit_plane(patch);
+      std::vector<Eigen::Vector3d> qa, qb;
+      for (const auto& p : q) (std::abs(seed.normal.dot(p - seed.centroid)) <= flat ? qa : qb).push_back(p);
+      if (qa.size() < 5 || qb.size() < 5) continue;
+      const PlaneFit pa = plane_fit(qa), pb = plane_fit(qb);
+      const double rms = std::sqrt((pa.sse + pb.sse) / static_cast<double>(q.size() - 6));
+      if (rms < best) best = rms, a = pa, b = pb;
+    }
+    if (best < before) refine();
   }
   if (!(best <= flat) || !(best < share * smooth)) return out;
   if (std::abs(a.normal.dot(b.normal)) > std::cos(15 * std::numbers::pi / 180)) return out;  // nearly one plane
@@ -205,6 +230,10 @@ TwoPlanes fit_two_planes(std::span<const Eigen::Vector3d> q, const LocalPlane& f
   const Eigen::Vector2d ab = m.partialPivLu().solve(Eigen::Vector2d(a.normal.dot(a.centroid - c), b.normal.dot(b.centroid - c)));
   out.line_point = c + ab.x() * a.normal + ab.y() * b.normal;
   out.plane_a = a.plane, out.plane_b = b.plane, out.count_a = a.count, out.count_b = b.count;
+  for (const auto& p : q) {
+    const double da = std::abs(a.normal.dot(p - a.centroid)), db = std::abs(b.normal.dot(p - b.centroid));
+    if (std::max(da, db) > 3 * best) out.hinge = std::max(out.hinge, da <= db ? leverage(a.plane, a.count, p) : leverage(b.plane, b.count, p));
+  }
   return out;
 }
 

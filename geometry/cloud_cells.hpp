@@ -66,7 +66,9 @@ double safe_lift_deviations(std::size_t fits);
 
 // Two planes meeting on a line: a sharp crease. Found by splitting the points along eight directions
 // in their plane at five offsets (the split that leaves the least residual), then each point given to
-// the plane it is nearer and both refitted. Found when both are flat to `flat` (residual standard
+// the plane it is nearer and both refitted; where that leaves more than `flat` among 64 points or
+// fewer, split again by the plane of each point's six nearest (the points within `flat` of it one
+// side) and refined the same way. Found when both are flat to `flat` (residual standard
 // deviation, mm), flatter than `share` of the quadric's residual `smooth` (half by default), and 15°
 // or more apart; then each refitted without the points near both, which noise would give to either.
 struct TwoPlanes {
@@ -77,6 +79,9 @@ struct TwoPlanes {
   double residual = 0;
   LocalPlane plane_a, plane_b;  // the final fits, and the points each took
   std::size_t count_a = 0, count_b = 0;
+  // The largest leverage of a point in either plane's fit: near 1 where a plane hangs on one point
+  // (a row of points and one beside it, fitted exactly whatever lies between).
+  double hinge = 0;
   // mm: one standard deviation of the line's position at x (on it) from the noise: each plane's height
   // there (its offset and its tilt, by least squares' leverage) over the sine of the planes' angle.
   double line_uncertainty(const Eigen::Vector3d& x) const;
@@ -103,7 +108,6 @@ class LocalSurface {
   // The fit's variance there over the noise's: x^T (A^T A)^-1 x for the quadric's design over the
   // neighbourhood (about 6 / n amid the points, more towards their edge, above 1 beyond them).
   double leverage(const Eigen::Vector2d& uv) const;
-  // How far the neighbourhood's points stand off its plane, lowest and highest.
   // What the quadric leaves over the neighbourhood (residual standard deviation, mm).
   double residual() const { return residual_; }
   // The model over a spot, for standing a floor on it: the surface point, the normal its height is
@@ -118,6 +122,7 @@ class LocalSurface {
   // The neighbourhood's least-squares plane over the spot, the same way (its leverage by ordinary least
   // squares over the neighbourhood's points, its residual theirs about it).
   Spot plane_spot(const Eigen::Vector2d& uv) const;
+  // How far the neighbourhood's points stand off its plane, lowest and highest.
   double lowest() const { return lowest_; }
   double highest() const { return highest_; }
 

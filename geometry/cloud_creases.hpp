@@ -9,8 +9,8 @@
 // cells stand off their least-squares plane by more than the noise allows, they are split in two
 // (along each in-plane direction, and along the direction away from the cell's centroid; the split
 // that leaves the least residual), a plane is fitted to each half, and the cell holds a crease when
-// both halves are flat to the noise, the planes meet at 15° or more, and their line passes within a
-// cell of the cell's points. Under noise, a cell that shows nothing is read again over the points
+// both halves are flat to the noise, the planes meet at 15° or more, and their line passes within 1.5
+// cells of one of the cell's points. Under noise, a cell that shows nothing is read again over the points
 // within 53 noise deviations (where faces meeting at 30° stand a deviation off a quadric), the two
 // planes held to leave less than the quadric by five deviations of the residuals' ratio. The line is
 // sampled every `spacing` mm across the cell's extent and half a cell beyond.

@@ -44,17 +44,20 @@ TEST(CloudCreases, ACrestUnderNoiseIsPutBackNoLowerThanTheTolerance) {
   };
   for (const Case c : {Case{30, 0.3, 0.0, 1}, Case{40, 0.25, 0.035, 2}, Case{45, 0.6, 0.02, 3}, Case{35, 0.4, 0.05, 4},
                        // Issue 45's ridge 4: the cells' neighbourhoods alone cannot tell this crest from the noise.
-                       Case{24, 0.25, 0.072, 5}, Case{30, 0.3, 0.1, 6}}) {
+                       Case{24, 0.25, 0.072, 5}, Case{30, 0.3, 0.1, 6},
+                       // Flanks steeper than 45° (faces meeting at under 90°), sparse: issue 45's seed 6060, ridge 0.
+                       Case{48, 0.76, 0.021, 7}, Case{48, 0.76, 0.021, 11}, Case{55, 0.5, 0.03, 8}}) {
     const auto points = ridge(c.flank, c.spacing, c.noise, c.seed);
     const drom::geometry::CloudKdTree tree(points);
     const double noise = drom::geometry::scan_noise(points, tree);
     const auto creases = crease_points(points, noise, 0.1);
     // The crest's height over its middle (away from the scan's ends): the highest crease point in
-    // each 1 mm of y, as a ball resting on the crest would find it.
-    std::vector<double> highest(20, -1e9);
+    // each quarter millimetre of y, as a ball of radius 3 resting on the crest would find it (it sags
+    // 3 um between points that far apart).
+    std::vector<double> highest(80, -1e9);
     for (const auto& p : creases.points)
       if (std::abs(p.x()) < 1 && std::abs(p.y()) < 10) {
-        auto& h = highest[static_cast<std::size_t>(std::floor(p.y() + 10))];
+        auto& h = highest[static_cast<std::size_t>(std::floor((p.y() + 10) * 4))];
         h = std::max(h, p.z());
       }
     double lowest = 1e9, top = -1e9;
@@ -62,7 +65,9 @@ TEST(CloudCreases, ACrestUnderNoiseIsPutBackNoLowerThanTheTolerance) {
     std::printf("  ridge %.0f deg, spacing %.2f, noise %.3f (measured %.3f): %zu crease points; crest from %.4f to %.4f mm off the truth\n", c.flank, c.spacing, c.noise,
                 noise, creases.points.size(), lowest - 10, top - 10);
     EXPECT_GT(lowest, 10 - 0.01) << "every millimetre of the crest found, none lower than Tu";
-    EXPECT_LT(top, 10 + 0.02 + 4 * c.noise) << "stock left on the crest stays small";
+    // The line's own error (up to two of its deviations, which reach the noise's where few points
+    // stand near the crest) and the lift of three: up to five noise deviations.
+    EXPECT_LT(top, 10 + 0.02 + 5 * c.noise) << "stock left on the crest stays small";
   }
 }
 
