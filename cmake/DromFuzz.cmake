@@ -30,7 +30,8 @@ drom_sanitized_tests(support_tests "*" 60)      # slowest 3.6 s: the PNG plot (a
 drom_sanitized_tests(case_file_tests "*" 60)         # 0.9 s
 drom_sanitized_tests(reduce_tests "*" 60)       # 1.8 s
 drom_sanitized_tests(machine_tests "*" 120)     # 11.1 s: LinuxCNC's milling samples through rs274
-drom_sanitized_tests(geometry_tests "*" 120)    # 23.9 s: a STEP file that crashes OpenCASCADE
+# Not the hole filling's six-draw ball study beside a step's wall (16 s in Release, over 120 s here).
+drom_sanitized_tests(geometry_tests "-CloudHoles.ABallOnAStepsFilledScanDoesNotSinkBesideTheWallsTop" 120)  # 23.9 s: a STEP file that crashes OpenCASCADE
 # Removal on small parts and the G-code reader; the plate at every voxel size, the panel's pocket,
 # the graded plate and the hex-mesh convergence study run in the Release build.
 drom_sanitized_tests(levelset_tests
