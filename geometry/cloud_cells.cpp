@@ -157,16 +157,22 @@ TwoPlanes fit_two_planes(std::span<const Eigen::Vector3d> q, const LocalPlane& f
   if (q.size() < 16) return out;
   double best = std::numeric_limits<double>::infinity();
   PlaneFit a, b;
+  // A split of the points into two sides: both fitted, and kept when they leave less than the best so far.
+  const auto consider = [&](const std::vector<Eigen::Vector3d>& qa, const std::vector<Eigen::Vector3d>& qb) {
+    if (qa.size() < 5 || qb.size() < 5) return false;
+    const PlaneFit pa = plane_fit(qa), pb = plane_fit(qb);
+    const double rms = std::sqrt((pa.sse + pb.sse) / static_cast<double>(q.size() - 6));
+    if (!(rms < best)) return false;
+    best = rms, a = pa, b = pb;
+    return true;
+  };
   for (int d = 0; d < 8; ++d) {
     const double angle = std::numbers::pi * d / 8;
     const Eigen::Vector3d dir = std::cos(angle) * frame.u + std::sin(angle) * frame.v;
     for (const double offset : {-0.5 * reach, -0.25 * reach, 0.0, 0.25 * reach, 0.5 * reach}) {
       std::vector<Eigen::Vector3d> qa, qb;
       for (const auto& p : q) ((p - frame.centroid).dot(dir) < offset ? qa : qb).push_back(p);
-      if (qa.size() < 5 || qb.size() < 5) continue;
-      const PlaneFit pa = plane_fit(qa), pb = plane_fit(qb);
-      const double rms = std::sqrt((pa.sse + pb.sse) / static_cast<double>(q.size() - 6));
-      if (rms < best) best = rms, a = pa, b = pb;
+      consider(qa, qb);
     }
   }
   // The split refined: each point to the plane it is nearer, both planes fitted again.
@@ -174,11 +180,7 @@ TwoPlanes fit_two_planes(std::span<const Eigen::Vector3d> q, const LocalPlane& f
     for (int round = 0; round < 4 && std::isfinite(best); ++round) {
       std::vector<Eigen::Vector3d> qa, qb;
       for (const auto& p : q) (std::abs(a.normal.dot(p - a.centroid)) <= std::abs(b.normal.dot(p - b.centroid)) ? qa : qb).push_back(p);
-      if (qa.size() < 5 || qb.size() < 5) break;
-      const PlaneFit pa = plane_fit(qa), pb = plane_fit(qb);
-      const double rms = std::sqrt((pa.sse + pb.sse) / static_cast<double>(q.size() - 6));
-      if (!(rms < best)) break;
-      best = rms, a = pa, b = pb;
+      if (!consider(qa, qb)) break;
     }
   };
   refine();
@@ -197,10 +199,7 @@ TwoPlanes fit_two_planes(std::span<const Eigen::Vector3d> q, const LocalPlane& f
       const LocalPlane seed = fit_plane(patch);
       std::vector<Eigen::Vector3d> qa, qb;
       for (const auto& p : q) (std::abs(seed.normal.dot(p - seed.centroid)) <= flat ? qa : qb).push_back(p);
-      if (qa.size() < 5 || qb.size() < 5) continue;
-      const PlaneFit pa = plane_fit(qa), pb = plane_fit(qb);
-      const double rms = std::sqrt((pa.sse + pb.sse) / static_cast<double>(q.size() - 6));
-      if (rms < best) best = rms, a = pa, b = pb;
+      consider(qa, qb);
     }
     if (best < before) refine();
   }

@@ -50,14 +50,13 @@ FilledHoles fill_holes(std::span<const Eigen::Vector3d> points, const ScanSurvey
     std::vector<double> d2;
     tree.nearest(points[i], noisy_neighbours, near, d2);
     if (near.size() < 10) return;
-    std::vector<Eigen::Vector3d> q;
-    for (std::size_t r = 0; r < std::min<std::size_t>(near.size(), cell_neighbours); ++r) q.push_back(points[static_cast<std::size_t>(near[r])]);
-    LocalSurface local(q, flat);
     const auto nearest = [&](std::size_t count) {
       std::vector<Eigen::Vector3d> some;
       for (std::size_t r = 0; r < std::min(count, near.size()); ++r) some.push_back(points[static_cast<std::size_t>(near[r])]);
       return some;
     };
+    std::vector<Eigen::Vector3d> q = nearest(cell_neighbours);
+    LocalSurface local(q, flat);
     if (noisy && local.kind() == LocalSurface::Kind::quadric && near.size() > q.size()) {
       std::vector<Eigen::Vector3d> all = nearest(noisy_neighbours);
       LocalSurface smoother(all, wide_flat);
